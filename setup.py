@@ -1,0 +1,36 @@
+from setuptools import find_packages, setup
+
+PACKAGE = "physics_node"
+
+setup(
+    name=PACKAGE,
+    version="0.1.0",
+    packages=find_packages(include=["physics_core*", "physics_node*", "msg_adapters*", "benchmarks*"]),
+    data_files=[
+        ("share/ament_index/resource_index/packages", ["resource/" + PACKAGE]),
+        ("share/" + PACKAGE, ["package.xml"]),
+        ("share/" + PACKAGE + "/scenes", ["scenes/default.yaml"]),
+    ],
+    package_data={"physics_core": ["data/*.yaml"]},
+    include_package_data=True,
+    python_requires=">=3.11",
+    install_requires=["numpy>=1.24", "pyyaml>=6", "mcap>=1.1"],
+    extras_require={
+        "ros": ["ros-jazzy-rclpy", "ros-jazzy-rmw-fastrtps-cpp", "ros-jazzy-common-interfaces"],
+        "test": ["pytest>=7", "hypothesis>=6", "rosbags>=0.10"],
+        "bench": ["matplotlib>=3.7"],
+        "compare": ["pybullet", "mujoco"],
+    },
+    zip_safe=True,
+    maintainer="physics_node maintainers",
+    description="Rigid-body physics node for ROS 2 Jazzy with MCAP recording and exact replay",
+    license="Apache-2.0",
+    entry_points={
+        "console_scripts": [
+            "physics-node = physics_node.main:main",
+            "physics_node = physics_node.main:main",
+            "physics-replay = physics_node.replay:main",
+            "physics-bench = benchmarks.cli:main",
+        ],
+    },
+)
