@@ -1,0 +1,64 @@
+"""Buoyancy F_B = ρ g V_submerged, opposite to gravity (COURSE.md 2).
+
+The fluid fills z < surface_z. A sphere's submerged cap has the exact
+volume V = π h² (3r − h) / 3 (h = depth of its lowest point, clipped to
+[0, 2r]) and, by symmetry, exerts no torque. A box is split into cells³
+equal sub-boxes; each cell's submerged fraction is its depth across its
+vertical extent e = Σ_k |R_zk| h_k / cells, clipped to [0, 1], and its force
+acts at the centroid of that submerged slice. An upright box gets its exact
+volume, and a tilted box feels the restoring torque of its moving centre of
+buoyancy. Optional damping stands for the fluid's viscous resistance and is
+scaled by the submerged fraction.
+"""
+import numpy as np
+
+from .. import quaternion as qt
+from ..shapes import BOX, SPHERE
+
+
+def make(model):
+    p = model.effects["buoyancy"]
+    g = model.gravity
+    dynamic = ~model.is_static
+    spheres = np.flatnonzero(dynamic & (model.shape_type == SPHERE))
+    boxes = np.flatnonzero(dynamic & (model.shape_type == BOX))
+    r = model.radius[spheres]
+    k = p.cells
+    # Cell centres in units of the half extents: ((2i+1)/k − 1) on each axis.
+    ticks = (2.0 * np.arange(k) + 1.0) / k - 1.0
+    grid = np.stack(np.meshgrid(ticks, ticks, ticks, indexing="ij"), axis=-1).reshape(-1, 3)
+    h = model.half_extents[boxes]
+    cell_offsets = grid[None, :, :] * h[:, None, :]             # (B, k³, 3) body frame
+    cell_half = h / k                                            # (B, 3)
+    cell_volume = model.volume[boxes] / k ** 3
+    box_volume = model.volume[boxes]
+    up_force = -p.fluid_density * g                              # per unit submerged volume
+
+    def apply(kin, force, torque):
+        if len(spheres):
+            depth = np.clip(p.surface_z - (kin.pos[spheres, 2] - r), 0.0, 2.0 * r)
+            vol = np.pi * depth ** 2 * (3.0 * r - depth) / 3.0
+            force[spheres] += vol[:, None] * up_force
+            if p.linear_damping or p.angular_damping:
+                frac = (vol / model.volume[spheres])[:, None]
+                force[spheres] -= p.linear_damping * frac * kin.vel[spheres]
+                torque[spheres] -= p.angular_damping * frac * kin.omega[spheres]
+        if len(boxes):
+            q = kin.quat[boxes]
+            R = qt.to_matrix(q)                                    # (B, 3, 3)
+            arm = np.einsum("bij,bcj->bci", R, cell_offsets)       # (B, k³, 3) world offsets
+            e = np.einsum("bj,bj->b", np.abs(R[:, 2, :]), cell_half)
+            bottom = kin.pos[boxes, 2][:, None] + arm[:, :, 2] - e[:, None]
+            frac = np.clip((p.surface_z - bottom) / (2.0 * e[:, None]), 0.0, 1.0)   # (B, k³)
+            # centroid of the submerged slice sits f·e above the cell's bottom
+            arm = arm.copy()
+            arm[:, :, 2] += (frac - 1.0) * e[:, None]
+            vol = frac * cell_volume[:, None]
+            cell_force = vol[:, :, None] * up_force                # (B, k³, 3)
+            force[boxes] += cell_force.sum(axis=1)
+            torque[boxes] += np.cross(arm, cell_force).sum(axis=1)
+            if p.linear_damping or p.angular_damping:
+                f = (vol.sum(axis=1) / box_volume)[:, None]
+                force[boxes] -= p.linear_damping * f * kin.vel[boxes]
+                torque[boxes] -= p.angular_damping * f * kin.omega[boxes]
+    return apply

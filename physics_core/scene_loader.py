@@ -1,0 +1,320 @@
+"""Scene files (YAML) and dicts → a validated, frozen Model and a World.
+
+Every rule of INTERFACE.md's scene format is checked here, once, so the
+step never meets a bad parameter. A failure raises SceneError naming the
+file, the key path (``bodies[2].shape.radius``) and what was expected.
+"""
+import copy
+import os
+import warnings
+from types import MappingProxyType
+
+import numpy as np
+import yaml
+
+from . import materials, shapes
+from .contact_params import parse_contacts
+from .errors import SceneError
+from .model import (BuoyancyParams, DragParams, GravitationParams, Model, SpringSet,
+                    frozen_array)
+from .planets import PLANETS, surface_gravity
+from .validate import NAME_RE, Reader
+
+INTEGRATORS = ("explicit_euler", "semi_implicit_euler", "velocity_verlet", "rk4")
+TOP_KEYS = {"name", "description", "dt", "substeps", "integrator", "gravity", "effects",
+            "bodies", "springs", "friction"}
+EFFECT_KEYS = {"gravitation", "drag", "buoyancy", "contacts"}
+BODY_KEYS = {"name", "shape", "static", "mass", "density", "material", "restitution",
+             "position", "orientation", "velocity", "angular_velocity", "drag"}
+DEFAULT_DT = 1.0 / 240.0
+DEFAULT_RESTITUTION = 0.5
+QUAT_TOLERANCE = 1e-3   # |q| may differ from 1 by this much (typed-in decimals); then normalised
+
+
+def read_scene_source(scene):
+    """(data dict, source label, text, path) from a path or a dict."""
+    if isinstance(scene, dict):
+        data = copy.deepcopy(scene)
+        return data, "<dict>", yaml.safe_dump(data, sort_keys=False), None
+    path = os.fspath(scene)
+    try:
+        with open(path, encoding="utf-8") as f:
+            text = f.read()
+    except OSError as e:
+        raise SceneError(path, "", "a readable scene file", str(e)) from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as e:
+        raise SceneError(path, "", "valid YAML", str(e).replace("\n", " ")) from None
+    return data, path, text, path
+
+
+def parse_gravity(r: Reader):
+    if not r.has("gravity") or r.data["gravity"] is None:
+        return None
+    g = r.data["gravity"]
+    if isinstance(g, str):
+        if g not in PLANETS:
+            r.fail("gravity", "one of: " + ", ".join(PLANETS) + ", or [gx, gy, gz]", g)
+        return np.array([0.0, 0.0, -surface_gravity(g)])
+    if isinstance(g, dict):
+        gr = r.sub("gravity")
+        gr.only({"planet", "altitude"})
+        planet = gr.string("planet", choices=tuple(PLANETS))
+        return np.array([0.0, 0.0, -surface_gravity(planet, gr.number("altitude", 0.0, min=0.0))])
+    return r.vector("gravity", 3)
+
+
+def parse_effects(r: Reader, gravity):
+    er = r.sub("effects")
+    er.only(EFFECT_KEYS)
+    effects = {}
+    if er.has("gravitation"):
+        gr = er.sub("gravitation")
+        gr.only({"G", "softening"})
+        d = GravitationParams()
+        effects["gravitation"] = GravitationParams(
+            G=gr.number("G", d.G, positive=True), softening=gr.number("softening", d.softening, positive=True))
+    if er.has("drag"):
+        dr = er.sub("drag")
+        dr.only({"model", "fluid_density", "viscosity", "b", "reynolds_threshold"})
+        d = DragParams()
+        effects["drag"] = DragParams(
+            model=dr.string("model", d.model, choices=("linear", "quadratic", "reynolds")),
+            fluid_density=dr.number("fluid_density", d.fluid_density, min=0.0),
+            viscosity=dr.number("viscosity", d.viscosity, positive=True),
+            b=dr.number("b", d.b, min=0.0),
+            reynolds_threshold=dr.number("reynolds_threshold", d.reynolds_threshold, positive=True))
+    if er.has("buoyancy"):
+        br = er.sub("buoyancy")
+        br.only({"fluid_density", "surface_z", "linear_damping", "angular_damping", "cells"})
+        if gravity is None or not np.any(gravity):
+            br.fail("fluid_density", "buoyancy only with a `gravity:` that is not zero (F = ρ g V)",
+                    "no gravity")
+        d = BuoyancyParams()
+        effects["buoyancy"] = BuoyancyParams(
+            fluid_density=br.number("fluid_density", d.fluid_density, positive=True),
+            surface_z=br.number("surface_z", d.surface_z),
+            linear_damping=br.number("linear_damping", d.linear_damping, min=0.0),
+            angular_damping=br.number("angular_damping", d.angular_damping, min=0.0),
+            cells=br.number("cells", d.cells, min=1, max=16, integer=True))
+    if er.has("contacts"):
+        effects["contacts"] = parse_contacts(er.sub("contacts"))
+    return effects
+
+
+def parse_shape(br: Reader):
+    sr = br.sub("shape") if br.has("shape") else br.fail("shape", "a shape mapping (required)", "missing")
+    kind = sr.string("type", choices=tuple(shapes.SHAPE_NAMES))
+    radius, half, normal, offset = 0.0, np.zeros(3), np.array([0.0, 0.0, 1.0]), 0.0
+    if kind == "sphere":
+        sr.only({"type", "radius"})
+        radius = sr.number("radius", positive=True)
+    elif kind == "box":
+        sr.only({"type", "half_extents"})
+        half = sr.vector("half_extents", 3)
+        if np.any(half <= 0):
+            sr.fail("half_extents", "three numbers > 0", sr.data["half_extents"])
+    else:
+        sr.only({"type", "normal", "offset"})
+        normal = sr.vector("normal", 3, [0.0, 0.0, 1.0])
+        length = np.linalg.norm(normal)
+        if length < 1e-12:
+            sr.fail("normal", "a non-zero vector", sr.data["normal"])
+        normal = normal / length
+        offset = sr.number("offset", 0.0)
+    return shapes.SHAPE_NAMES[kind], radius, half, normal, offset
+
+
+def parse_body(br: Reader, known_materials):
+    br.only(BODY_KEYS)
+    name = br.string("name")
+    if not NAME_RE.match(name) or name == "world":
+        br.fail("name", "a name of letters, digits and _ starting with a letter, not 'world' "
+                "(it becomes a ROS topic name)", name)
+    stype, radius, half, normal, offset = parse_shape(br)
+    static = br.boolean("static", stype == shapes.PLANE)
+    if stype == shapes.PLANE and not static:
+        br.fail("static", "true: a plane is a static half-space", False)
+    if br.has("mass") and br.has("density"):
+        br.fail("density", "either mass or density, not both", br.data["density"])
+    vol = float(shapes.volume(np.array([stype]), np.array([radius]), half[None])[0])
+    if br.has("mass"):
+        mass = br.number("mass", positive=True)
+    elif br.has("density"):
+        if stype == shapes.PLANE:
+            br.fail("density", "no density on a plane (it has no volume)", br.data["density"])
+        mass = br.number("density", positive=True) * vol
+    elif static:
+        mass = 0.0
+    else:
+        br.fail("mass", "mass (kg) or density (kg/m³) for a dynamic body", "missing")
+    material = br.string("material", materials.DEFAULT_MATERIAL)
+    if material not in known_materials:
+        br.fail("material", "a material of the friction table: " + ", ".join(sorted(known_materials)),
+                material)
+    restitution = br.number("restitution", DEFAULT_RESTITUTION, min=0.0, max=1.0)
+    pos = br.vector("position", 3, [0.0, 0.0, 0.0])
+    quat = br.vector("orientation", 4, [1.0, 0.0, 0.0, 0.0])
+    qn = np.linalg.norm(quat)
+    if abs(qn - 1.0) > QUAT_TOLERANCE:
+        br.fail("orientation", f"a unit quaternion [w, x, y, z] (|q| = 1 ± {QUAT_TOLERANCE})",
+                br.data["orientation"])
+    quat = quat / qn
+    vel = br.vector("velocity", 3, [0.0, 0.0, 0.0])
+    omega = br.vector("angular_velocity", 3, [0.0, 0.0, 0.0])
+    if static and (np.any(vel) or np.any(omega)):
+        br.fail("velocity" if np.any(vel) else "angular_velocity",
+                "zero velocities on a static body", "non-zero")
+    dr = br.sub("drag")
+    dr.only({"cd", "area", "b"})
+    nan = float("nan")
+    drag = (dr.number("cd", shapes.DEFAULT_CD[stype], min=0.0),
+            dr.number("area", positive=True) if dr.has("area") else nan,
+            dr.number("b", min=0.0) if dr.has("b") else nan)
+    return dict(name=name, stype=stype, radius=radius, half=half, normal=normal, offset=offset,
+                static=static, mass=mass, material=material, restitution=restitution,
+                pos=pos, quat=quat, vel=vel, omega=omega, drag=drag)
+
+
+def parse_friction(r: Reader):
+    """`friction: [{a: rubber, b: ice, static: 0.1, kinetic: 0.05}, ...]`."""
+    pairs = {}
+    for fr in r.items("friction"):
+        fr.only({"a", "b", "static", "kinetic"})
+        a, b = fr.string("a"), fr.string("b")
+        for k, m in (("a", a), ("b", b)):
+            if not NAME_RE.match(m):
+                fr.fail(k, "a material name of letters, digits and _", m)
+        mu_s = fr.number("static", min=0.0)
+        mu_k = fr.number("kinetic", min=0.0)
+        if mu_k > mu_s:
+            fr.fail("kinetic", f"kinetic <= static ({mu_s}) (COURSE.md 2: μ_k < μ_s)", mu_k)
+        pairs[(a, b)] = (mu_s, mu_k)
+    return pairs
+
+
+def friction_matrices(names, table):
+    m = len(names)
+    mu_s = np.empty((m, m))
+    mu_k = np.empty((m, m))
+    fallbacks = []
+    for i, a in enumerate(names):
+        for j, b in enumerate(names):
+            v = table.get(materials.pair_key(a, b))
+            if v is None:
+                v = materials.FALLBACK_FRICTION
+                if i <= j:
+                    fallbacks.append((a, b))
+            mu_s[i, j], mu_k[i, j] = v
+    return mu_s, mu_k, tuple(fallbacks)
+
+
+def parse_springs(r: Reader, index):
+    cols = {k: [] for k in ("a", "b", "point_a", "point_b", "stiffness", "rest_length", "damping")}
+    for sr in r.items("springs"):
+        sr.only(set(cols))
+        ends = []
+        for key in ("a", "b"):
+            name = sr.string(key)
+            if name != "world" and name not in index:
+                sr.fail(key, "a body name or 'world'", name)
+            ends.append(-1 if name == "world" else index[name])
+        if ends[0] == ends[1]:
+            sr.fail("b", "two different ends", sr.data["b"])
+        cols["a"].append(ends[0])
+        cols["b"].append(ends[1])
+        cols["point_a"].append(sr.vector("point_a", 3, [0.0, 0.0, 0.0]))
+        cols["point_b"].append(sr.vector("point_b", 3, [0.0, 0.0, 0.0]))
+        cols["stiffness"].append(sr.number("stiffness", min=0.0))
+        cols["rest_length"].append(sr.number("rest_length", 0.0, min=0.0))
+        cols["damping"].append(sr.number("damping", 0.0, min=0.0))
+    return SpringSet(
+        a=frozen_array(cols["a"], int), b=frozen_array(cols["b"], int),
+        point_a=frozen_array(np.reshape(cols["point_a"], (-1, 3))),
+        point_b=frozen_array(np.reshape(cols["point_b"], (-1, 3))),
+        stiffness=frozen_array(cols["stiffness"]), rest_length=frozen_array(cols["rest_length"]),
+        damping=frozen_array(cols["damping"]))
+
+
+def build_model(scene) -> Model:
+    data, source, text, path = read_scene_source(scene)
+    if data is None:
+        data = {}
+    r = Reader(source, data)
+    r.only(TOP_KEYS)
+    dt = r.number("dt", DEFAULT_DT, positive=True)
+    substeps = r.number("substeps", 1, min=1, integer=True)
+    integrator = r.string("integrator", "semi_implicit_euler", choices=INTEGRATORS)
+    gravity = parse_gravity(r)
+    effects = parse_effects(r, gravity)
+
+    extra_pairs = parse_friction(r)
+    table = materials.build_table(extra_pairs)
+    known = set(materials.COURSE_MATERIALS) | {materials.DEFAULT_MATERIAL}
+    known |= {m for pair in extra_pairs for m in pair}
+
+    body_readers = r.items("bodies")
+    if not body_readers:
+        r.fail("bodies", "a list of at least one body", data.get("bodies"))
+    bodies, index = [], {}
+    for br in body_readers:
+        b = parse_body(br, known)
+        if b["name"] in index:
+            br.fail("name", "a name not used by another body", b["name"])
+        index[b["name"]] = len(bodies)
+        bodies.append(b)
+    springs = parse_springs(r, index)
+
+    used = sorted({b["material"] for b in bodies})
+    mu_s, mu_k, fallbacks = friction_matrices(used, table)
+    if fallbacks and "contacts" in effects:
+        warnings.warn(f"{source}: friction pairs not in the table use the fallback "
+                      f"μ_s={materials.FALLBACK_FRICTION[0]}, μ_k={materials.FALLBACK_FRICTION[1]}: "
+                      + ", ".join(f"{a}-{b}" for a, b in fallbacks), stacklevel=3)
+
+    col = lambda k, dtype=float: np.array([b[k] for b in bodies], dtype=dtype)
+    stype = col("stype", int)
+    radius = col("radius")
+    half = np.array([b["half"] for b in bodies]).reshape(-1, 3)
+    static = col("static", bool)
+    mass = col("mass")
+    inv_mass = np.where(static, 0.0, 1.0 / np.where(mass > 0, mass, 1.0))
+    inertia = shapes.principal_inertia(stype, mass, radius, half)
+    inv_inertia = np.where(static[:, None] | (inertia <= 0), 0.0,
+                           1.0 / np.where(inertia > 0, inertia, 1.0))
+    drag = np.array([b["drag"] for b in bodies]).reshape(-1, 3)
+    initial = MappingProxyType({
+        "pos": frozen_array([b["pos"] for b in bodies]),
+        "quat": frozen_array([b["quat"] for b in bodies]),
+        "vel": frozen_array([b["vel"] for b in bodies]),
+        "omega": frozen_array([b["omega"] for b in bodies]),
+    })
+    return Model(
+        names=tuple(index), index=MappingProxyType(dict(index)),
+        shape_type=frozen_array(stype, int), radius=frozen_array(radius),
+        half_extents=frozen_array(half),
+        plane_normal=frozen_array([b["normal"] for b in bodies]),
+        plane_offset=frozen_array(col("offset")),
+        mass=frozen_array(mass), inv_mass=frozen_array(inv_mass),
+        inertia=frozen_array(inertia), inv_inertia=frozen_array(inv_inertia),
+        is_static=frozen_array(static, bool),
+        volume=frozen_array(shapes.volume(stype, radius, half)),
+        restitution=frozen_array(col("restitution")),
+        material=frozen_array([used.index(b["material"]) for b in bodies], int),
+        material_names=tuple(used), mu_static=frozen_array(mu_s), mu_kinetic=frozen_array(mu_k),
+        friction_fallbacks=fallbacks,
+        drag_cd=frozen_array(drag[:, 0]), drag_area=frozen_array(drag[:, 1]),
+        drag_b=frozen_array(drag[:, 2]),
+        char_length=frozen_array(shapes.characteristic_length(stype, radius, half)),
+        springs=springs,
+        gravity=None if gravity is None else frozen_array(gravity),
+        effects=MappingProxyType(effects), dt=dt, substeps=substeps, integrator=integrator,
+        initial=initial, source_text=text, source_path=path,
+    )
+
+
+def load_scene(scene):
+    """A World from a YAML scene file path or a dict with the same keys."""
+    from .world import World
+    return World(build_model(scene))
