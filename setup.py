@@ -1,3 +1,5 @@
+from glob import glob
+
 from setuptools import find_packages, setup
 
 PACKAGE = "physics_node"
@@ -9,7 +11,7 @@ setup(
     data_files=[
         ("share/ament_index/resource_index/packages", ["resource/" + PACKAGE]),
         ("share/" + PACKAGE, ["package.xml"]),
-        ("share/" + PACKAGE + "/scenes", ["scenes/default.yaml"]),
+        ("share/" + PACKAGE + "/scenes", sorted(glob("scenes/*.yaml"))),
     ],
     package_data={"physics_core": ["data/*.yaml"]},
     include_package_data=True,
