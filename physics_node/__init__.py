@@ -1,0 +1,1 @@
+"""ROS 2 node around physics_core: stepping, commands, outputs, recording and replay."""

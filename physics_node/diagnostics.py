@@ -1,0 +1,69 @@
+"""What /diagnostics reports, gathered over the window since the last report."""
+
+import time
+
+from msg_adapters.diagnostics import OK, WARN, diagnostic_array
+
+STATUS_NAME = "physics: simulation"
+
+
+class DiagnosticsWindow:
+    def __init__(self, world, drop_reasons):
+        self.world = world
+        self.dropped_total = {reason: 0 for reason in drop_reasons}
+        self.applied_total = 0
+        self._open(time.monotonic())
+
+    def _open(self, now):
+        self._wall_start = now
+        self._sim_start = self.world.time
+        self._steps = 0
+        self._loop_seconds = 0.0
+        self._engine_seconds = 0.0
+        self._dropped = 0
+        self._profile_start = dict(getattr(self.world, "profile", {}) or {})
+
+    def stepped(self, applied, loop_seconds):
+        self._steps += 1
+        self._loop_seconds += loop_seconds
+        self._engine_seconds += float(getattr(self.world, "last_step_seconds", 0.0))
+        self.applied_total += applied
+
+    def dropped(self, reason):
+        self.dropped_total[reason] = self.dropped_total.get(reason, 0) + 1
+        self._dropped += 1
+
+    def report(self, stamp_ns, hardware_id, paused, target_rtf, recording):
+        """DiagnosticArray for the window just ended; opens the next one."""
+        now = time.monotonic()
+        w = self.world
+        wall = max(now - self._wall_start, 1e-9)
+        # A reset moves sim time backwards; the window then measures from 0.
+        sim = w.time - self._sim_start if w.time >= self._sim_start else w.time
+        steps = max(self._steps, 1)
+        values = {
+            "sim_time_s": float(w.time),
+            "steps": int(w.step_index),
+            "real_time_factor": sim / wall,
+            "real_time_factor_target": float(target_rtf),
+            "step_time_ms": 1e3 * self._engine_seconds / steps,
+            "loop_time_ms": 1e3 * self._loop_seconds / steps,
+            "bodies": len(w.model.names),
+            "contacts": len(w.contacts),
+            "dropped_commands": sum(self.dropped_total.values()),
+        }
+        for reason, count in self.dropped_total.items():
+            values[f"dropped_{reason}"] = count
+        values["applied_commands"] = self.applied_total
+        values["paused"] = bool(paused)
+        values["recording"] = recording
+        profile = dict(getattr(w, "profile", {}) or {})
+        for stage, seconds in profile.items():
+            spent = seconds - self._profile_start.get(stage, 0.0)
+            values[f"stage_{stage}_ms"] = 1e3 * max(spent, 0.0) / steps
+        if self._dropped:
+            level, message = WARN, f"{self._dropped} bad commands dropped in the last {wall:.1f} s"
+        else:
+            level, message = OK, "paused" if paused else "running"
+        self._open(now)
+        return diagnostic_array(stamp_ns, STATUS_NAME, hardware_id, level, message, values)

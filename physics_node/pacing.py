@@ -1,0 +1,51 @@
+"""Keeping sim time in step with wall time scaled by the real-time factor."""
+
+import math
+
+
+class StepPacer:
+    """How many fixed steps are due at a wall-clock instant.
+
+    Sim time should advance `real_time_factor` times as fast as wall time.
+    If the engine falls more than `max_lag` wall seconds behind, the backlog
+    is dropped (the sim runs slower than asked; diagnostics show the real
+    factor) rather than stepping in a burst to catch up.
+    """
+
+    def __init__(self, dt, real_time_factor, max_lag=0.25):
+        self.dt = float(dt)
+        self.real_time_factor = float(real_time_factor)
+        self.max_lag = max_lag
+        self._start = None
+        self._taken = 0
+
+    @property
+    def unlimited(self):
+        return self.real_time_factor <= 0.0
+
+    def restart(self, now):
+        self._start = now
+        self._taken = 0
+
+    def due(self, now):
+        """Steps due at `now` (wall seconds); None means as many as possible."""
+        if self.unlimited:
+            return None
+        if self._start is None:
+            self.restart(now)
+        elapsed = now - self._start
+        due = math.floor(elapsed * self.real_time_factor / self.dt + 1e-9) - self._taken
+        if due * self.dt / self.real_time_factor > self.max_lag:
+            self.restart(now - self.dt / self.real_time_factor)
+            due = 1
+        return max(due, 0)
+
+    def took(self, steps):
+        self._taken += steps
+
+    def tick_period(self):
+        """Timer period for the node: one step's wall time, kept between 1 ms
+        (Python timer overhead) and 20 ms (command latency)."""
+        if self.unlimited:
+            return 0.0
+        return min(max(self.dt / self.real_time_factor, 0.001), 0.02)

@@ -1,0 +1,51 @@
+"""QoS of every topic the node offers or takes, and its rosbag2 YAML form."""
+
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+# Streams: reliable so recorders and tests see every step, volatile.
+STREAM = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST,
+    depth=10,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+)
+# /clock and ~/bodies: a late joiner gets the latest value at once. Reliable
+# + transient-local is offered, which also satisfies best-effort subscribers
+# such as the sim-time clock of other nodes.
+LATCHED = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST,
+    depth=1,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+)
+# Commands: a deep reliable queue so a burst of impulses is not lost.
+COMMANDS = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST,
+    depth=100,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+)
+
+# rmw's "infinite" duration, as rosbag2 writes it.
+_INFINITE = {"sec": 9223372036, "nsec": 854775807}
+
+_HISTORY = {HistoryPolicy.KEEP_LAST: "keep_last", HistoryPolicy.KEEP_ALL: "keep_all"}
+_RELIABILITY = {ReliabilityPolicy.RELIABLE: "reliable", ReliabilityPolicy.BEST_EFFORT: "best_effort"}
+_DURABILITY = {DurabilityPolicy.VOLATILE: "volatile", DurabilityPolicy.TRANSIENT_LOCAL: "transient_local"}
+
+
+def offered_qos_yaml(profile):
+    """`offered_qos_profiles` channel metadata: a YAML list with one profile,
+    in the string-enum layout rosbag2 has written since metadata version 9."""
+    lines = [
+        f"- history: {_HISTORY.get(profile.history, 'keep_last')}",
+        f"  depth: {int(profile.depth)}",
+        f"  reliability: {_RELIABILITY.get(profile.reliability, 'reliable')}",
+        f"  durability: {_DURABILITY.get(profile.durability, 'volatile')}",
+    ]
+    for key in ("deadline", "lifespan"):
+        lines += [f"  {key}:", f"    sec: {_INFINITE['sec']}", f"    nsec: {_INFINITE['nsec']}"]
+    lines += ["  liveliness: automatic", "  liveliness_lease_duration:"]
+    lines += [f"    sec: {_INFINITE['sec']}", f"    nsec: {_INFINITE['nsec']}"]
+    lines += ["  avoid_ros_namespace_conventions: false"]
+    return "\n".join(lines) + "\n"
