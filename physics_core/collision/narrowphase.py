@@ -1,0 +1,197 @@
+"""Narrow phase: contact points, normals and depths for candidate pairs.
+
+Each shape-pair kind has a kernel vectorised over all pairs of that kind
+(COURSE.md 5: point, normal that separates the bodies, depth). A kernel
+gets the two bodies in its own shape order ("first", "second") with one
+pose per pair, and returns rows (pair row, slot, point, normal from first
+to second, depth). `contacts` runs the kernels over a mixed list of pairs,
+flipping the normal where the pair's `a` is the kernel's "second" body, so
+every row keeps the Manifold convention (normal from a towards b).
+
+Planes are world-fixed half-spaces n·x <= offset (their pose is not used).
+Box–box lives in narrow_box.py.
+"""
+import numpy as np
+
+from .. import quaternion as qt
+from ..shapes import BOX, PLANE, SPHERE
+from .broadphase import candidate_pairs
+from .manifold import Manifold, pair_key
+from .narrow_box import box_box, box_box_separation
+
+# Sign pattern of the 8 box vertices: vertex v has x sign from bit 0, y from bit 1, z from bit 2.
+BOX_VERTEX_SIGNS = np.array([[1.0 if v & (1 << k) else -1.0 for k in range(3)] for v in range(8)])
+BOX_PLANE_POINTS = 4          # deepest box vertices kept against a plane
+COINCIDENT_NORMAL = np.array([0.0, 0.0, 1.0])   # sphere–sphere normal when the centres coincide
+_TINY = 1e-12
+
+
+def _one_row(point, normal, depth):
+    k = len(depth)
+    return np.arange(k), np.zeros(k, np.int64), point, normal, depth
+
+
+def sphere_sphere(model, f, s, pf, qf, ps, qs, margin=0.0):
+    """Normal along the line of centres; depth r_a + r_b - |c_b - c_a|.
+
+    Coincident centres have no line of centres: the normal is then +z
+    (COINCIDENT_NORMAL), a fixed choice so the result is never NaN."""
+    ra, rb = model.radius[f], model.radius[s]
+    d = ps - pf
+    dist = np.sqrt(np.einsum("ij,ij->i", d, d))
+    ok = dist > _TINY
+    normal = np.where(ok[:, None], d / np.where(ok, dist, 1.0)[:, None], COINCIDENT_NORMAL)
+    depth = ra + rb - dist
+    point = 0.5 * ((pf + normal * ra[:, None]) + (ps - normal * rb[:, None]))
+    return _one_row(point, normal, depth)
+
+
+def plane_sphere(model, f, s, pf, qf, ps, qs, margin=0.0):
+    """Sphere above plane n·x = offset: height h = n·c - offset, depth r - h,
+    normal n (from the plane to the sphere)."""
+    n = model.plane_normal[f]
+    r = model.radius[s]
+    h = np.einsum("ij,ij->i", n, ps) - model.plane_offset[f]
+    point = ps - n * (0.5 * (r + h))[:, None]     # midway between c - r n and c - h n
+    return _one_row(point, n.copy(), r - h)
+
+
+def box_sphere(model, f, s, pf, qf, ps, qs, margin=0.0):
+    """Sphere against box, worked in the box frame (normal from box to sphere).
+
+    Outside: the closest box point is the centre clamped to [-h, h]; the
+    normal runs from it to the centre, depth r - distance. Inside (centre
+    within the box): push out through the face nearest the centre, depth
+    r + distance from the centre to that face."""
+    h = model.half_extents[f]
+    r = model.radius[s]
+    c = qt.rotate_inverse(qf, ps - pf)
+    q = np.clip(c, -h, h)
+    diff = c - q
+    dist = np.sqrt(np.einsum("ij,ij->i", diff, diff))
+    outside = dist > _TINY
+    gap = h - np.abs(c)                       # distance from the centre to each face pair
+    axis = np.argmin(gap, axis=1)
+    rows = np.arange(len(c))
+    side = np.where(c[rows, axis] >= 0.0, 1.0, -1.0)
+    n_in = np.zeros_like(c)
+    n_in[rows, axis] = side
+    face = c.copy()
+    face[rows, axis] = side * h[rows, axis]
+    n_local = np.where(outside[:, None], diff / np.where(outside, dist, 1.0)[:, None], n_in)
+    surface = np.where(outside[:, None], q, face)
+    depth = np.where(outside, r - dist, r + gap[rows, axis])
+    normal = qt.rotate(qf, n_local)
+    box_point = pf + qt.rotate(qf, surface)
+    point = 0.5 * (box_point + ps - normal * r[:, None])
+    return _one_row(point, normal, depth)
+
+
+def box_vertices(pos, quat, half):
+    """(k, 8, 3) world vertices, ordered as BOX_VERTEX_SIGNS."""
+    R = qt.to_matrix(quat)
+    local = BOX_VERTEX_SIGNS[None, :, :] * half[:, None, :]
+    return pos[:, None, :] + np.einsum("kij,kvj->kvi", R, local)
+
+
+def plane_box(model, f, s, pf, qf, ps, qs, margin=0.0):
+    """Box vertices less than `margin` above the plane, the deepest
+    BOX_PLANE_POINTS of them; slot = vertex number, so a resting box keeps
+    its keys. Point midway between the vertex and its projection on the plane."""
+    n = model.plane_normal[f]
+    verts = box_vertices(ps, qs, model.half_extents[s])
+    height = np.einsum("kvi,ki->kv", verts, n) - model.plane_offset[f][:, None]
+    depth = -height
+    ranked = np.where(depth > -margin, depth, -np.inf)
+    order = np.argsort(-ranked, axis=1, kind="stable")[:, :BOX_PLANE_POINTS]
+    keep = np.take_along_axis(ranked, order, axis=1) > -np.inf
+    row, col = np.nonzero(keep)
+    vertex = order[row, col]
+    h = height[row, vertex]
+    point = verts[row, vertex] - n[row] * (0.5 * h)[:, None]
+    return row, vertex.astype(np.int64), point, n[row], -h
+
+
+KERNELS = (
+    (SPHERE, SPHERE, sphere_sphere),
+    (PLANE, SPHERE, plane_sphere),
+    (PLANE, BOX, plane_box),
+    (BOX, SPHERE, box_sphere),
+    (BOX, BOX, box_box),
+)
+
+
+def _kind_rows(ta, tb, first, second):
+    """Pairs of this kind in kernel order, then those stored the other way round."""
+    direct = np.flatnonzero((ta == first) & (tb == second))
+    if first == second:
+        return direct, np.zeros(0, np.int64)
+    return direct, np.flatnonzero((ta == second) & (tb == first))
+
+
+def _kernel_rows(model, a, b, pa, qa, pb, qb, margin):
+    """(pair, slot, point, normal a→b, depth) over every kernel, grouped by kind."""
+    ta, tb = model.shape_type[a], model.shape_type[b]
+    parts = []
+    for first, second, kernel in KERNELS:
+        direct, swapped = _kind_rows(ta, tb, first, second)
+        if len(direct) + len(swapped) == 0:
+            continue
+        idx = np.concatenate([direct, swapped])
+        flip = np.arange(len(idx)) >= len(direct)
+        f = np.where(flip, b[idx], a[idx])
+        s = np.where(flip, a[idx], b[idx])
+        pf = np.where(flip[:, None], pb[idx], pa[idx])
+        qf = np.where(flip[:, None], qb[idx], qa[idx])
+        ps = np.where(flip[:, None], pa[idx], pb[idx])
+        qs = np.where(flip[:, None], qa[idx], qb[idx])
+        row, slot, point, normal, depth = kernel(model, f, s, pf, qf, ps, qs, margin)
+        normal = np.where(flip[row, None], -normal, normal)
+        parts.append((idx[row], slot, point, normal, depth))
+    if not parts:
+        z = np.zeros(0, np.int64)
+        return z, z, np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
+    return tuple(np.concatenate(col) for col in zip(*parts))
+
+
+def contacts(model, a, b, pa, qa, pb, qb, margin: float = 0.0) -> Manifold:
+    """Contact rows for pairs (a[i], b[i]) at poses (pa, qa) and (pb, qb).
+
+    Rows are grouped by kind, unfiltered (depth may be below -margin for
+    single-point kinds) and unsorted; `collide` filters and sorts."""
+    a = np.asarray(a, dtype=np.int64)
+    b = np.asarray(b, dtype=np.int64)
+    pair, slot, point, normal, depth = _kernel_rows(model, a, b, pa, qa, pb, qb, margin)
+    return Manifold(a=a[pair], b=b[pair], point=point, normal=normal, depth=depth,
+                    key=pair_key(a[pair], b[pair], model.n, slot))
+
+
+def collide(model, pos, quat, margin: float = 0.0) -> Manifold:
+    """Broad phase, then every kernel; rows with depth > -margin, sorted by key."""
+    a, b = candidate_pairs(model, pos, quat, margin)
+    if len(a) == 0:
+        return Manifold.empty()
+    m = contacts(model, a, b, pos[a], quat[a], pos[b], quat[b], margin)
+    return m.take(m.depth > -margin).sorted_by_key()
+
+
+def signed_depth(model, a, b, pa, qa, pb, qb) -> np.ndarray:
+    """(k,) how far each pair overlaps at the given poses: > 0 overlapping,
+    <= 0 apart. The sign is exact; for separated box pairs the magnitude is
+    a lower bound of the gap (the largest separating-axis distance)."""
+    a = np.asarray(a, dtype=np.int64)
+    b = np.asarray(b, dtype=np.int64)
+    out = np.full(len(a), -np.inf)
+    ta, tb = model.shape_type[a], model.shape_type[b]
+    bb = (ta == BOX) & (tb == BOX)
+    if bb.any():
+        out[bb] = -box_box_separation(model.half_extents[a[bb]], pa[bb], qa[bb],
+                                      model.half_extents[b[bb]], pb[bb], qb[bb])
+    rest = np.flatnonzero(~bb)
+    if len(rest):
+        # the deepest contact row of each pair, with no margin cut
+        pair, _, _, _, depth = _kernel_rows(model, a[rest], b[rest], pa[rest], qa[rest],
+                                            pb[rest], qb[rest], np.inf)
+        np.maximum.at(out, rest[pair], depth)
+    return out
+
