@@ -182,13 +182,15 @@ class World:
         body (stored in body axes) so τ = r × F follows the body as it turns."""
         i = self._body_index(name)
         f = self._vec(force, f"force on {name!r}")
+        # Validate every argument before touching the state: a refused command
+        # must leave no trace (not even its valid half).
+        p = None if point is None else self._vec(point, f"point of force on {name!r}")
         s = self.state
         s.user_force[i] = f
         s.has_user_force = True
-        if point is None:
+        if p is None:
             s.user_force_offset[i] = 0.0
         else:
-            p = self._vec(point, f"point of force on {name!r}")
             s.user_force_offset[i] = qt.rotate_inverse(s.quat[i:i + 1], (p - s.pos[i])[None])[0]
             s.has_user_torque = True
         self.wake(i)
@@ -206,10 +208,10 @@ class World:
         At a world `point`, it also adds the angular impulse r × J."""
         i = self._body_index(name)
         j = self._vec(impulse, f"impulse on {name!r}")
+        p = None if point is None else self._vec(point, f"point of impulse on {name!r}")
         s = self.state
         s.impulse[i] += j
-        if point is not None:
-            p = self._vec(point, f"point of impulse on {name!r}")
+        if p is not None:
             s.angular_impulse[i] += np.cross(p - s.pos[i], j)
         s.has_pending_impulse = True
         self.wake(i)
