@@ -35,6 +35,7 @@ class World:
         self.profile = defaultdict(float)
         self.last_step_profile = {}
         self.last_step_seconds = 0.0
+        self._prof = {}   # the current step's timings; forces() may also be called between steps
         self._force_effects = build_force_effects(model)
         self._integrate = INTEGRATORS[model.integrator]
         self._contact_stages = []
