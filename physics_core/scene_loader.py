@@ -4,8 +4,8 @@ Every rule of INTERFACE.md's scene format is checked here, once, so the
 step never meets a bad parameter. A failure raises SceneError naming the
 file, the key path (``bodies[2].shape.radius``) and what was expected.
 """
-import copy
 import os
+import re
 import warnings
 from types import MappingProxyType
 
@@ -31,11 +31,41 @@ DEFAULT_RESTITUTION = 0.5
 QUAT_TOLERANCE = 1e-3   # |q| may differ from 1 by this much (typed-in decimals); then normalised
 
 
+class SceneYamlLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
+    """Safe YAML whose numbers follow YAML 1.2: `1e6`, `1.0e6` and `2E-3` are floats.
+
+    PyYAML implements YAML 1.1, where a float needs a dot and a signed
+    exponent, so `stiffness: 1e6` would arrive as the string "1e6"."""
+
+
+SceneYamlLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
+    list("-+0123456789."))
+
+_SceneYamlDumper = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
+
+
+def plain_data(value):
+    """A deep copy of a scene dict with numpy scalars and arrays (and tuples) turned
+    into Python floats, ints and lists, so that numpy-built scenes validate and
+    serialise like typed-in ones."""
+    if isinstance(value, dict):
+        return {k: plain_data(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [plain_data(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return plain_data(value.tolist())
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
 def read_scene_source(scene):
     """(data dict, source label, text, path) from a path or a dict."""
     if isinstance(scene, dict):
-        data = copy.deepcopy(scene)
-        return data, "<dict>", yaml.safe_dump(data, sort_keys=False), None
+        data = plain_data(scene)
+        return data, "<dict>", yaml.dump(data, Dumper=_SceneYamlDumper, sort_keys=False), None
     path = os.fspath(scene)
     try:
         with open(path, encoding="utf-8") as f:
@@ -43,7 +73,7 @@ def read_scene_source(scene):
     except OSError as e:
         raise SceneError(path, "", "a readable scene file", str(e)) from None
     try:
-        data = yaml.safe_load(text)
+        data = yaml.load(text, Loader=SceneYamlLoader)
     except yaml.YAMLError as e:
         raise SceneError(path, "", "valid YAML", str(e).replace("\n", " ")) from None
     return data, path, text, path
