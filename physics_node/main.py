@@ -6,11 +6,13 @@ and a human flag wins when both set the same parameter.
 
 import argparse
 import os
+import signal
 import sys
 
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.parameter import Parameter
+from rclpy.signals import SignalHandlerOptions
 
 from physics_core import SceneError
 
@@ -76,10 +78,34 @@ def how_to_push(node):
     return "\n".join(lines)
 
 
+class StopRequest:
+    """Ctrl-C and SIGTERM ask the spin loop to stop between callbacks, so a
+    step or a recording write is never cut in half. A second signal stops at
+    once (the recording is still closed on the way out)."""
+
+    def __init__(self):
+        self.signal_name = None
+
+    def install(self):
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(sig, self._handle)
+
+    def _handle(self, signum, _frame):
+        if self.signal_name is not None:
+            raise KeyboardInterrupt
+        self.signal_name = signal.Signals(signum).name
+
+    @property
+    def requested(self):
+        return self.signal_name is not None
+
+
 def main(argv=None):
     argv = list(sys.argv if argv is None else argv)
     args = build_parser().parse_args(rclpy.utilities.remove_ros_args(args=argv)[1:])
-    rclpy.init(args=argv)
+    stop = StopRequest()
+    stop.install()
+    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
     node = None
     status = 0
     try:
@@ -87,8 +113,10 @@ def main(argv=None):
         print(how_to_push(node), flush=True)
         executor = SingleThreadedExecutor()
         executor.add_node(node)
-        while rclpy.ok() and not node.finished:
+        while rclpy.ok() and not node.finished and not stop.requested:
             executor.spin_once(timeout_sec=0.1)
+        if stop.requested:
+            node.get_logger().info(f"{stop.signal_name}: stopping")
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except (SceneError, ParameterValueError) as exc:

@@ -1,0 +1,205 @@
+"""Shared helpers for the node tests: start `physics-node` as a separate
+process and drive it from this one. Holds no tests itself.
+
+Every test run uses its own ROS domain (from the pid) and localhost-only
+discovery, so parallel runs and other ROS traffic do not mix.
+"""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+DOMAIN_ID = os.environ.get("PHYSICS_TEST_DOMAIN_ID") or str(1 + os.getpid() % 100)
+os.environ["ROS_DOMAIN_ID"] = DOMAIN_ID
+ISOLATED_DOMAIN_ID = str(int(DOMAIN_ID) + 100)
+os.environ.setdefault("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
+os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+
+import rclpy  # noqa: E402  (the environment above must be set first)
+from rclpy.executors import SingleThreadedExecutor  # noqa: E402
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
+
+# Two free bodies (no gravity, no contacts): the box is turned 90° about z,
+# so its body x axis points along world +y.
+FREE_SCENE = """\
+dt: 0.01
+integrator: semi_implicit_euler
+bodies:
+  - name: ball
+    shape: {type: sphere, radius: 0.1}
+    mass: 2.0
+    position: [0, 0, 1]
+  - name: box
+    shape: {type: box, half_extents: [0.2, 0.1, 0.1]}
+    mass: 4.0
+    position: [1, 0, 1]
+    orientation: [0.7071067811865476, 0, 0, 0.7071067811865476]
+"""
+FREE_DT_NS = 10_000_000
+
+LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+STREAM = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
+
+
+def node_env(domain_id=None):
+    env = dict(os.environ)
+    if domain_id is not None:
+        env["ROS_DOMAIN_ID"] = str(domain_id)
+    env["PYTHONPATH"] = os.pathsep.join([str(REPO), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
+    env["PYTHONUNBUFFERED"] = "1"
+    return env
+
+
+class NodeProcess:
+    """`python -m physics_node.main ARGS` in its own process group."""
+
+    def __init__(self, args, workdir, module="physics_node.main", isolated=False):
+        # isolated: a domain of its own, for a process no test node talks to,
+        # so it cannot disturb a node another test is driving.
+        self.log_path = Path(workdir) / f"node-{time.monotonic_ns()}.log"
+        self._log = open(self.log_path, "wb")
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", module, *map(str, args)],
+            cwd=REPO,
+            env=node_env(ISOLATED_DOMAIN_ID if isolated else None),
+            stdout=self._log,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,
+        )
+
+    def alive(self):
+        return self.proc.poll() is None
+
+    def log(self):
+        if not self._log.closed:
+            self._log.flush()
+        return self.log_path.read_text(errors="replace")
+
+    def wait_for_log(self, text, timeout=20.0):
+        """Wait until the node has printed `text` (it prints how to push a body
+        once it is up)."""
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            if text in self.log():
+                return
+            if not self.alive():
+                pytest.fail(f"node exited with {self.proc.returncode}; log:\n{self.log()}")
+            time.sleep(0.05)
+        pytest.fail(f"node never printed {text!r}; log:\n{self.log()}")
+
+    def wait_until_up(self, timeout=20.0):
+        self.wait_for_log("Push '", timeout)
+
+    def signal(self, sig):
+        if self.alive():
+            os.kill(self.proc.pid, sig)
+
+    def wait(self, timeout=15.0):
+        try:
+            return self.proc.wait(timeout)
+        except subprocess.TimeoutExpired:
+            pytest.fail(f"node did not exit within {timeout} s; log:\n{self.log()}")
+
+    def stop(self):
+        """Make sure the process is gone (used in finally blocks)."""
+        if self.alive():
+            self.signal(signal.SIGINT)
+            try:
+                self.proc.wait(5.0)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait(5.0)
+        self._log.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.stop()
+
+
+def run_cli(module, args, timeout=60.0):
+    """Run a module's CLI to completion; returns CompletedProcess (text)."""
+    return subprocess.run(
+        [sys.executable, "-m", module, *map(str, args)],
+        cwd=REPO,
+        env=node_env(),
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
+
+
+class Driver:
+    """A node in the test process that publishes commands, calls services and
+    keeps what it receives."""
+
+    def __init__(self, name="test_driver"):
+        if not rclpy.ok():
+            rclpy.init()
+        self.node = rclpy.create_node(f"{name}_{os.getpid()}_{time.monotonic_ns()}")
+        self.executor = SingleThreadedExecutor()
+        self.executor.add_node(self.node)
+        self.received = {}
+        self._publishers = {}
+        self._clients = {}
+
+    def close(self):
+        self.executor.remove_node(self.node)
+        self.node.destroy_node()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    # -- topics -------------------------------------------------------------
+    def listen(self, msg_type, topic, qos=STREAM):
+        box = self.received.setdefault(topic, [])
+        self.node.create_subscription(msg_type, topic, box.append, qos)
+        return box
+
+    def publisher(self, msg_type, topic):
+        pub = self._publishers.get(topic)
+        if pub is None:
+            pub = self.node.create_publisher(msg_type, topic, 100)
+            self._publishers[topic] = pub
+        return pub
+
+    def wait_for_subscriber(self, msg_type, topic, timeout=10.0):
+        pub = self.publisher(msg_type, topic)
+        self.spin_until(lambda: pub.get_subscription_count() > 0, timeout, f"no subscriber on {topic}")
+        return pub
+
+    def spin_for(self, seconds):
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            self.executor.spin_once(timeout_sec=0.01)
+
+    def spin_until(self, predicate, timeout=10.0, what="condition"):
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            if predicate():
+                return
+            self.executor.spin_once(timeout_sec=0.01)
+        if predicate():
+            return
+        pytest.fail(f"timed out after {timeout} s waiting for {what}")
+
+    # -- services -------------------------------------------------------------
+    def call(self, srv_type, name, timeout=10.0):
+        client = self._clients.get(name)
+        if client is None:
+            client = self.node.create_client(srv_type, name)
+            self._clients[name] = client
+        self.spin_until(client.service_is_ready, timeout, f"service {name}")
+        future = client.call_async(srv_type.Request())
+        self.spin_until(future.done, timeout, f"reply from {name}")
+        return future.result()
