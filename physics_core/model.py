@@ -85,7 +85,7 @@ class Model:
     gravity: Optional[np.ndarray]
     effects: Mapping[str, Any]   # declared effect name -> its params
     dt: float
-    substeps: int
+    substeps: int                # as declared; the World may run more for stiff springs (World.substeps)
     integrator: str
     initial: Mapping[str, np.ndarray]
     source_text: str = ""

@@ -5,6 +5,8 @@ compose without drift of the rotation axes and renormalise cheaply.
 """
 import numpy as np
 
+from .vec3 import cross
+
 
 def multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Hamilton product p ⊗ q for arrays of quaternions (..., 4)."""
@@ -45,16 +47,16 @@ def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
     """Rotate vectors v (n, 3) from body to world frame: q v q*."""
     w = q[..., :1]
     u = q[..., 1:]
-    t = 2.0 * np.cross(u, v)
-    return v + w * t + np.cross(u, t)
+    t = 2.0 * cross(u, v)
+    return v + w * t + cross(u, t)
 
 
 def rotate_inverse(q: np.ndarray, v: np.ndarray) -> np.ndarray:
     """Rotate vectors v (n, 3) from world to body frame: q* v q."""
     w = q[..., :1]
     u = -q[..., 1:]
-    t = 2.0 * np.cross(u, v)
-    return v + w * t + np.cross(u, t)
+    t = 2.0 * cross(u, v)
+    return v + w * t + cross(u, t)
 
 
 def from_rotation_vector(phi: np.ndarray) -> np.ndarray:

@@ -14,6 +14,7 @@ import numpy as np
 
 from .. import quaternion as qt
 from ..shapes import BOX, SPHERE
+from ..vec3 import cross
 
 
 def make(model):
@@ -56,7 +57,7 @@ def make(model):
             vol = frac * cell_volume[:, None]
             cell_force = vol[:, :, None] * up_force                # (B, k³, 3)
             force[boxes] += cell_force.sum(axis=1)
-            torque[boxes] += np.cross(arm, cell_force).sum(axis=1)
+            torque[boxes] += cross(arm, cell_force).sum(axis=1)
             if p.linear_damping or p.angular_damping:
                 f = (vol.sum(axis=1) / box_volume)[:, None]
                 force[boxes] -= p.linear_damping * f * kin.vel[boxes]

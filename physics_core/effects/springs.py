@@ -5,50 +5,135 @@ b, each applied at its attachment point so an off-centre spring also
 produces torque τ = r × F. The damper acts along the spring (a dashpot);
 for motion along the spring this is the course's F_A = −C (v_A − v_B).
 A spring of zero length has no direction and exerts K·d = 0.
+
+Stiff springs and explicit steps: a spring of stiffness K on an effective
+mass m_eff oscillates at ω = √(K/m_eff); the step-by-step integrators are
+only stable for ω h below a limit (2 for semi-implicit Euler and velocity
+Verlet, 2.83 for RK4) and only accurate well below it. `stable_substeps`
+gives the sub-step count that keeps ω h ≤ MAX_OMEGA_H and the damper's rate
+(C/m_eff) h ≤ MAX_DAMPING_H for the stiffest spring; the World runs that many
+internal sub-steps. Explicit Euler grows an undamped oscillation by
+√(1 + ω²h²) every step whatever h is: sub-steps slow the growth but cannot
+stop it, so stiff undamped springs need another integrator.
 """
+import math
+import warnings
+
 import numpy as np
 
 from .. import quaternion as qt
+from ..vec3 import cross, dot
+
+MAX_OMEGA_H = 0.5       # rad per sub-step: stable with margin; period error ≈ (ω h)²/24 ≤ 1 %
+MAX_DAMPING_H = 0.5     # (C/m_eff) h: the damper removes at most about half the relative speed per sub-step
+MAX_SPRING_SUBSTEPS = 1000
 
 
-def _ends(model, kin):
-    """World attachment points, their offsets and point velocities for both ends.
+def effective_inverse_mass(model):
+    """Upper bound of 1/m_eff each spring sees along its line, per spring (1/kg).
 
-    Index -1 is the world: an extra row with zero pose and velocity is appended."""
+    At an attachment offset r the inverse mass along a unit direction u is
+    1/m + (r × u)·I_w⁻¹ (r × u) ≤ 1/m + |r|² max(I⁻¹) (COURSE.md 5's impulse
+    denominator); the two ends add. World and static ends count as infinite mass."""
     s = model.springs
-    n = model.n
-    pos = np.vstack([kin.pos, np.zeros((1, 3))])
-    quat = np.vstack([kin.quat, [[1.0, 0.0, 0.0, 0.0]]])
-    vel = np.vstack([kin.vel, np.zeros((1, 3))])
-    omega = np.vstack([kin.omega, np.zeros((1, 3))])
-    out = []
+    total = np.zeros(len(s))
     for body, local in ((s.a, s.point_a), (s.b, s.point_b)):
-        i = np.where(body < 0, n, body)
-        arm = qt.rotate(quat[i], local)
-        out.append((i, pos[i] + arm, arm, vel[i] + np.cross(omega[i], arm)))
-    return out
+        on_body = body >= 0
+        i = np.where(on_body, body, 0)
+        inv_m = np.where(on_body, model.inv_mass[i], 0.0)
+        inv_i = np.where(on_body, model.inv_inertia[i].max(axis=1), 0.0)
+        total += inv_m + np.einsum("ij,ij->i", local, local) * inv_i
+    return total
+
+
+def stable_substeps(model, dt) -> int:
+    """Sub-steps per step of length dt keeping ω h ≤ MAX_OMEGA_H and (C/m_eff) h ≤ MAX_DAMPING_H
+    for every spring (1 without springs); capped at MAX_SPRING_SUBSTEPS with a warning."""
+    if not len(model.springs):
+        return 1
+    inv_m = effective_inverse_mass(model)
+    s = model.springs
+    omega = np.sqrt(s.stiffness * inv_m)                 # rad/s
+    rate = s.damping * inv_m                             # 1/s
+    need = max(float(omega.max()) * dt / MAX_OMEGA_H, float(rate.max()) * dt / MAX_DAMPING_H, 1.0)
+    n = math.ceil(need - 1e-9)
+    if n > MAX_SPRING_SUBSTEPS:
+        warnings.warn(f"the stiffest spring needs {n} sub-steps per step of {dt} s "
+                      f"(ω = {float(omega.max()):.4g} rad/s); using {MAX_SPRING_SUBSTEPS}: "
+                      "lower dt or the stiffness", RuntimeWarning, stacklevel=3)
+        n = MAX_SPRING_SUBSTEPS
+    return n
+
+
+class _End:
+    """One end (a or b) of every spring: which body, and where on it.
+
+    A world end (index -1) holds its world point in `fixed`; a body end its
+    body-frame offset in `local`. `turns` is false when every body end is at
+    a centre of mass, so the rotations and r × F are skipped."""
+
+    def __init__(self, model, body, local):
+        self.on_body = body >= 0
+        self.row = np.where(self.on_body, body, 0)
+        self.mask = self.on_body[:, None].astype(float)
+        self.local = np.where(self.on_body[:, None], local, 0.0)
+        self.fixed = np.where(self.on_body[:, None], 0.0, local)
+        self.turns = bool(np.any(self.local))
+        self.bodies = self.row[self.on_body]
+
+    def points(self, kin):
+        """World attachment points, offsets from the centres (m) and point velocities (m/s)."""
+        i = self.row
+        if self.turns:
+            arm = qt.rotate(kin.quat[i], self.local) * self.mask
+            vel = (kin.vel[i] + cross(kin.omega[i], arm)) * self.mask
+        else:
+            arm = None
+            vel = kin.vel[i] * self.mask
+        point = kin.pos[i] * self.mask + self.fixed
+        if arm is not None:
+            point += arm
+        return point, arm, vel
+
+
+def _ends(model):
+    s = model.springs
+    return _End(model, s.a, s.point_a), _End(model, s.b, s.point_b)
+
+
+def makes_torque(model) -> bool:
+    """Whether some spring is attached away from a body's centre of mass (τ = r × F)."""
+    return any(end.turns for end in _ends(model)) if len(model.springs) else False
+
+
+def _accumulate(out, end, value):
+    """out[body] += value for the spring ends on bodies (several springs may share a body)."""
+    sel = end.on_body
+    np.add.at(out, end.bodies, value[sel] if not sel.all() else value)
 
 
 def make(model):
     s = model.springs
-    n = model.n
     k, l0, c = s.stiffness, s.rest_length, s.damping
+    end_a, end_b = _ends(model)
+    damped = bool(np.any(c))
 
     def apply(kin, force, torque):
-        (ia, pa, ra, va), (ib, pb, rb, vb) = _ends(model, kin)
+        pa, ra, va = end_a.points(kin)
+        pb, rb, vb = end_b.points(kin)
         d = pb - pa
-        length = np.sqrt(np.einsum("ij,ij->i", d, d))
+        length = np.sqrt(dot(d, d))
         u = d / np.where(length > 0, length, 1.0)[:, None]
-        rel_speed = np.einsum("ij,ij->i", vb - va, u)
-        f = (k * (length - l0) + c * rel_speed)[:, None] * u
-        fa = np.zeros((n + 1, 3))
-        ta = np.zeros((n + 1, 3))
-        np.add.at(fa, ia, f)
-        np.add.at(fa, ib, -f)
-        np.add.at(ta, ia, np.cross(ra, f))
-        np.add.at(ta, ib, np.cross(rb, -f))
-        force += fa[:n]
-        torque += ta[:n]
+        tension = k * (length - l0)
+        if damped:
+            tension = tension + c * dot(vb - va, u)
+        f = tension[:, None] * u
+        _accumulate(force, end_a, f)
+        _accumulate(force, end_b, -f)
+        if ra is not None:
+            _accumulate(torque, end_a, cross(ra, f))
+        if rb is not None:
+            _accumulate(torque, end_b, cross(rb, -f))
     return apply
 
 
@@ -56,7 +141,7 @@ def potential(model, state) -> float:
     """U = Σ ½ K (l − l₀)²."""
     from . import Kinematics
     kin = Kinematics(state.pos, state.quat, state.vel, state.omega)
-    (_, pa, _, _), (_, pb, _, _) = _ends(model, kin)
-    length = np.linalg.norm(pb - pa, axis=1)
+    end_a, end_b = _ends(model)
+    length = np.linalg.norm(end_b.points(kin)[0] - end_a.points(kin)[0], axis=1)
     s = model.springs
     return float(np.sum(0.5 * s.stiffness * (length - s.rest_length) ** 2))
