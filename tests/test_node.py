@@ -232,6 +232,21 @@ def test_bodies_topic_is_latched_with_one_marker_per_body(sim):
     assert markers[1].type == Marker.CUBE and markers[1].scale.x == pytest.approx(0.4)
 
 
+def test_push_and_follow_example_moves_the_body(sim):
+    node, driver = sim
+    fresh(driver)
+    driver.call(Empty, "/unpause_physics")
+    example = NodeProcess(["--body", "ball", "--force", "2", "0", "0", "--seconds", "0.3"], node.log_path.parent,
+                          module="examples.push_and_follow")
+    try:
+        assert example.wait(30.0) == 0, example.log()
+    finally:
+        example.stop()
+    lines = [line for line in example.log().splitlines() if line.startswith("t=")]
+    assert lines, example.log()
+    assert "+0.0000, +0.0000, +1.0000" not in lines[-1], "the ball should have moved along x"
+
+
 def test_sigterm_stops_the_node_cleanly(tmp_path):
     scene = tmp_path / "free.yaml"
     scene.write_text(FREE_SCENE)
