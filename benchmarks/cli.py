@@ -1,0 +1,85 @@
+"""`physics-bench`: accuracy, stability, scale and effect-cost studies.
+
+    physics-bench accuracy  [--quick] [--out DIR]   integrators × dt × substeps, contacts
+    physics-bench stability [--quick] [--out DIR]   hard cases, stiff spring, long runs, random scenes
+    physics-bench scale     [--quick] [--out DIR]   piles and pyramid beside PyBullet and MuJoCo
+    physics-bench effects   [--quick] [--out DIR]   per-effect cost table
+    physics-bench all       [--quick] [--out DIR]   all of the above
+
+Each writes Markdown tables (`*.md`), plots (`*.png`) and raw data (`*.json`)
+into DIR (default benchmarks/results) and refreshes DIR/README_results.md;
+with the default DIR, also the results section of the README. Progress goes
+to stderr.
+"""
+import argparse
+import os
+import sys
+from time import perf_counter
+
+from .results_io import DEFAULT_OUT, ensure
+
+STUDIES = ("accuracy", "stability", "scale", "effects")
+
+
+def _run_accuracy(args):
+    from . import accuracy, contact_accuracy
+    accuracy.run(quick=args.quick, out=args.out, only=args.only)
+    contact_accuracy.run(quick=args.quick, out=args.out)
+
+
+def _run_stability(args):
+    from . import stability
+    stability.run(quick=args.quick, out=args.out)
+
+
+def _run_scale(args):
+    from . import scale
+    scale.run(quick=args.quick, out=args.out)
+
+
+def _run_effects(args):
+    from . import effects_cost
+    effects_cost.run(quick=args.quick, out=args.out)
+
+
+RUNNERS = {"accuracy": _run_accuracy, "stability": _run_stability,
+           "scale": _run_scale, "effects": _run_effects}
+
+
+def parser():
+    p = argparse.ArgumentParser(prog="physics-bench", description=__doc__.split("\n\n")[0],
+                                formatter_class=argparse.RawDescriptionHelpFormatter,
+                                epilog=__doc__.split("\n\n", 1)[1])
+    sub = p.add_subparsers(dest="study", required=True)
+    for name in STUDIES + ("all",):
+        s = sub.add_parser(name, help=f"run the {name} stud{'ies' if name == 'all' else 'y'}")
+        s.add_argument("--quick", action="store_true",
+                       help="CI-sized run: fewer step sizes, shorter runs, fewer bodies")
+        s.add_argument("--out", default=DEFAULT_OUT, help="output folder (default: %(default)s)")
+        if name in ("accuracy", "all"):
+            s.add_argument("--only", nargs="+", metavar="PROBLEM",
+                           help="accuracy problems to run (harmonic damped drag_fall kepler free_top)")
+    return p
+
+
+def main(argv=None):
+    args = parser().parse_args(argv)
+    args.out = os.path.abspath(args.out)
+    ensure(args.out)
+    if not hasattr(args, "only"):
+        args.only = None
+    studies = STUDIES if args.study == "all" else (args.study,)
+    start = perf_counter()
+    for name in studies:
+        t0 = perf_counter()
+        sys.stderr.write(f"== {name}{' (quick)' if args.quick else ''} ==\n")
+        RUNNERS[name](args)
+        sys.stderr.write(f"== {name} done in {perf_counter() - t0:.0f} s ==\n")
+    from . import summary
+    written = summary.write(args.out, update_readme=os.path.samefile(args.out, ensure(DEFAULT_OUT)))
+    sys.stderr.write(f"wrote {', '.join(written)} ({perf_counter() - start:.0f} s in all)\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,154 @@
+"""The stability cases, as functions returning measurements, shared by
+`physics-bench stability` and tests/test_stability.py.
+
+Each case states its pass condition next to its measurement, so the test
+asserts exactly what the benchmark table reports.
+"""
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from physics_core import NonFiniteStateError, load_scene
+
+from .problems import KEPLER, KEPLER_PERIOD
+
+# ---- stiff spring ------------------------------------------------------------
+STIFF_K, STIFF_MASS, STIFF_DT = 1.0e6, 1.0, 1.0 / 240.0
+STIFF_OFFSET = 0.01          # m from equilibrium at the start
+STIFF_BOUND = 1.5            # pass: |displacement| never exceeds 1.5 × the start offset
+
+
+def stiff_spring_scene(integrator="semi_implicit_euler"):
+    """1 kg hanging from a k = 10⁶ N/m spring (ω = 1000 rad/s, ω·dt = 4.2 at 1/240 s),
+    started 1 cm below equilibrium."""
+    rest = 0.5
+    sag = STIFF_MASS * 9.81 / STIFF_K
+    return {"dt": STIFF_DT, "integrator": integrator, "gravity": "earth",
+            "bodies": [{"name": "bob", "shape": {"type": "sphere", "radius": 0.05},
+                        "mass": STIFF_MASS, "position": [0.0, 0.0, -rest - sag - STIFF_OFFSET]}],
+            "springs": [{"a": "bob", "b": "world", "stiffness": STIFF_K, "rest_length": rest,
+                         "point_b": [0.0, 0.0, 0.0]}]}
+
+
+@dataclass
+class StiffSpringResult:
+    integrator: str
+    steps: int
+    max_offset_ratio: float    # max |displacement from equilibrium| / start offset
+    energy_ratio: float        # max energy above its start / start oscillation energy
+    finite: bool
+    spring_substeps: object    # what the engine reports using (None: it does not say)
+    seconds: float
+
+    @property
+    def bounded(self):
+        return self.finite and self.max_offset_ratio <= STIFF_BOUND
+
+
+def stiff_spring(integrator="semi_implicit_euler", duration=1.0):
+    from time import perf_counter
+    world = load_scene(stiff_spring_scene(integrator))
+    g = -float(world.model.gravity[2])
+    z_eq = -0.5 - STIFF_MASS * g / STIFF_K
+    e_osc = 0.5 * STIFF_K * STIFF_OFFSET ** 2
+    e0 = world.energy()
+    worst, e_worst, finite = 0.0, 0.0, True
+    steps = round(duration / STIFF_DT)
+    t0 = perf_counter()
+    try:
+        for _ in range(steps):
+            world.step()
+            z = world.body("bob").position[2]
+            worst = max(worst, abs(z - z_eq) / STIFF_OFFSET)
+            e_worst = max(e_worst, (world.energy() - e0) / e_osc)
+            if worst > 1e6:
+                break
+    except NonFiniteStateError:
+        finite = False
+    return StiffSpringResult(integrator, steps, worst, e_worst, finite,
+                             getattr(world, "spring_substeps", None), perf_counter() - t0)
+
+
+# ---- long runs: energy of an eccentric orbit over 10⁵ steps ----------------
+LONG_DT = KEPLER_PERIOD / 256          # 256 steps per orbit: 10⁵ steps ≈ 390 orbits
+LONG_SAMPLE = 50                       # steps between energy samples
+# pass: the largest |ΔE/E| stays under this, and the last tenth of the run
+# is not worse than DRIFT_GROWTH × the first tenth (bounded, not drifting)
+LONG_LIMITS = {"semi_implicit_euler": 0.05, "velocity_verlet": 5e-3, "rk4": 1e-3,
+               "explicit_euler": float("inf")}
+DRIFT_GROWTH = 1.5
+
+
+@dataclass
+class LongRunResult:
+    integrator: str
+    steps: int
+    max_rel_energy_error: float
+    first_tenth: float
+    last_tenth: float
+    final_rel_energy_error: float
+    seconds: float
+
+    @property
+    def limit(self):
+        return LONG_LIMITS[self.integrator]
+
+    @property
+    def bounded(self):
+        return (math.isfinite(self.max_rel_energy_error)
+                and self.max_rel_energy_error <= self.limit
+                and self.last_tenth <= DRIFT_GROWTH * self.first_tenth + 1e-12)
+
+
+def long_run(integrator="semi_implicit_euler", steps=100_000):
+    from time import perf_counter
+    world = load_scene(KEPLER.build(integrator, LONG_DT, 1))
+    e0 = world.energy()
+    dev = []
+    t0 = perf_counter()
+    try:
+        for _ in range(steps // LONG_SAMPLE):
+            world.step(LONG_SAMPLE)
+            dev.append(abs(world.energy() / e0 - 1.0))
+    except NonFiniteStateError:
+        dev.append(float("inf"))
+    dev = np.array(dev)
+    tenth = max(1, len(dev) // 10)
+    return LongRunResult(integrator, steps, float(dev.max()), float(dev[:tenth].max()),
+                         float(dev[-tenth:].max()), float(world.energy() / e0 - 1.0),
+                         perf_counter() - t0)
+
+
+# ---- random scenes -------------------------------------------------------------
+ENERGY_GAIN_TOLERANCE = 0.05     # of the largest kinetic energy seen in the run
+MOMENTUM_TOLERANCE = 1e-9        # of Σ m (|v| + 1 m/s)
+RANDOM_STEPS = 240
+
+
+@dataclass
+class RandomRunResult:
+    finite: bool
+    energy_gain: float           # (max E − E₀) / energy scale
+    momentum_drift: float        # |P − P₀| / momentum scale
+
+
+def run_random(scene, steps=RANDOM_STEPS, sample=10):
+    """Step a random scene, checking every `sample` steps."""
+    world = load_scene(scene)
+    e0 = world.energy()
+    p0 = world.momentum()
+    mass = np.where(world.model.is_static, 0.0, world.model.mass)
+    p_scale = float(np.sum(mass * (np.linalg.norm(world.state.vel, axis=1) + 1.0)))
+    ke_max = world.kinetic_energy()
+    gain, drift = 0.0, 0.0
+    try:
+        for _ in range(steps // sample):
+            world.step(sample)
+            ke_max = max(ke_max, world.kinetic_energy())
+            gain = max(gain, world.energy() - e0)
+            drift = max(drift, float(np.linalg.norm(world.momentum() - p0)) / p_scale)
+    except NonFiniteStateError:
+        return RandomRunResult(False, float("inf"), float("inf"))
+    finite = bool(np.all(np.isfinite(world.state.pos)) and np.all(np.isfinite(world.state.vel)))
+    return RandomRunResult(finite, gain / (ke_max + 1e-9), drift)
