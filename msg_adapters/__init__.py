@@ -8,7 +8,7 @@ from .contacts import ContactArrays, cloud_to_structured, contact_cloud, contact
 from .diagnostics import diagnostic_array, diagnostic_values
 from .frames import WORLD_FRAME, rotate_to_body, rotate_to_world
 from .markers import body_markers, scene_markers
-from .poses import arrays_from_pose_array, odometry, pose_array, state_from_odometry
+from .poses import arrays_from_pose_array, odometries, odometry, pose_array, state_from_odometry
 from .schema import message_class, ros2msg_schema, type_name
 from .stamps import sim_time_ns, time_msg, time_ns
 from .wrenches import is_world_frame, to_world_axes, wrench_arrays, wrench_stamped
@@ -25,6 +25,7 @@ __all__ = [
     "diagnostic_values",
     "is_world_frame",
     "message_class",
+    "odometries",
     "odometry",
     "pose_array",
     "ros2msg_schema",

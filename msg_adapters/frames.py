@@ -9,6 +9,14 @@ import numpy as np
 WORLD_FRAME = "world"
 
 
+def _cross(a, b):
+    # Written out: np.cross costs ~20 µs of axis bookkeeping per call, more
+    # than the arithmetic on a few vectors, and it runs for every body and step.
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
 def rotate_to_world(quat_wxyz, v_body):
     """Rotate body-axis vectors into world axes (one quaternion, or one per row)."""
     q = np.asarray(quat_wxyz, dtype=np.float64)
@@ -16,8 +24,8 @@ def rotate_to_world(quat_wxyz, v_body):
     w = q[..., :1]
     u = q[..., 1:]
     # v' = v + 2w (u × v) + 2 u × (u × v), the expanded sandwich product.
-    t = 2.0 * np.cross(u, v)
-    return v + w * t + np.cross(u, t)
+    t = 2.0 * _cross(u, v)
+    return v + w * t + _cross(u, t)
 
 
 def rotate_to_body(quat_wxyz, v_world):

@@ -48,13 +48,26 @@ def odometry(name, pos, quat, vel, omega, stamp_ns, frame_id=WORLD_FRAME):
     `child_frame_id`, so the world-frame velocities are turned into body axes.
     Covariances stay zero: the simulation knows its state exactly.
     """
+    return _odometry(name, pos, quat, rotate_to_body(quat, vel), rotate_to_body(quat, omega), stamp_ns, frame_id)
+
+
+def odometries(names, pos, quat, vel, omega, stamp_ns, frame_id=WORLD_FRAME):
+    """Odometry of every body (rows of the state arrays), rotating all
+    twists into body axes at once."""
+    v_body = rotate_to_body(quat, vel).tolist()
+    w_body = rotate_to_body(quat, omega).tolist()
+    return [
+        _odometry(name, p, q, v, w, stamp_ns, frame_id)
+        for name, p, q, v, w in zip(names, pos.tolist(), quat.tolist(), v_body, w_body)
+    ]
+
+
+def _odometry(name, pos, quat, v_body, w_body, stamp_ns, frame_id):
     msg = Odometry()
     msg.header.stamp = time_msg(stamp_ns)
     msg.header.frame_id = frame_id
     msg.child_frame_id = name
     msg.pose.pose = _pose(pos, quat)
-    v_body = rotate_to_body(quat, vel)
-    w_body = rotate_to_body(quat, omega)
     t = msg.twist.twist
     t.linear.x, t.linear.y, t.linear.z = (float(x) for x in v_body)
     t.angular.x, t.angular.y, t.angular.z = (float(x) for x in w_body)

@@ -14,7 +14,7 @@ from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import String
 from visualization_msgs.msg import MarkerArray
 
-from msg_adapters import body_markers, contact_cloud, odometry, pose_array, scene_markers, time_msg
+from msg_adapters import body_markers, contact_cloud, odometries, pose_array, scene_markers, time_msg
 
 from .qos import COMMANDS, LATCHED, STREAM
 from .recorder import EVENTS_SUFFIX, RESET_EVENT
@@ -58,9 +58,8 @@ class Outputs:
     def send_state(self, world, time_ns, step):
         s = world.state
         self._send(self.poses, pose_array(s.pos, s.quat, time_ns), time_ns, step)
-        for i, name in enumerate(self.model.names):
-            msg = odometry(name, s.pos[i], s.quat[i], s.vel[i], s.omega[i], time_ns)
-            self._send(self.odom[i], msg, time_ns, step)
+        for publisher, msg in zip(self.odom, odometries(self.model.names, s.pos, s.quat, s.vel, s.omega, time_ns)):
+            self._send(publisher, msg, time_ns, step)
         contacts = world.contacts
         self._send(self.contacts, contact_cloud(contacts, time_ns), time_ns, step)
         self._send(self.markers, scene_markers(self.model, s.pos, s.quat, contacts, time_ns), time_ns, step)
