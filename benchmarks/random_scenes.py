@@ -22,8 +22,10 @@ ROTATIONAL_STIFFENING = 4.5
 
 
 def _unit_quaternion(rng):
-    q = [rng.gauss(0.0, 1.0) for _ in range(4)]
-    n = math.sqrt(sum(c * c for c in q)) or 1.0
+    q = [rng.uniform(-1.0, 1.0) for _ in range(4)]
+    n = math.sqrt(sum(c * c for c in q))
+    if n < 1e-3:          # too short to give a direction: no rotation
+        return [1.0, 0.0, 0.0, 0.0]
     return [c / n for c in q]
 
 
