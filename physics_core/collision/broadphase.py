@@ -1,18 +1,21 @@
 """Broad phase: the pairs of bodies whose bounding boxes overlap.
 
-A uniform grid hashes every axis-aligned bounding box (AABB) into the cells
-it covers; only bodies sharing a cell are compared, so the cost follows the
-number of bodies and of near neighbours instead of n². Everything is numpy
-sorts and index arithmetic, no loop over bodies or pairs:
+A uniform grid hashes every axis-aligned bounding box (AABB) by the cell of
+its centre; only bodies in the same or neighbouring cells are compared, so
+the cost follows the number of bodies and of near neighbours instead of n².
+Everything is numpy sorts, searchsorted and index arithmetic, no loop over
+bodies or pairs:
 
-- the cell size is the 90th percentile of the boxes' largest extent, so a
-  typical body covers 1–2 cells per axis;
-- bodies spanning more than `MAX_SPAN` cells on an axis (a long static slab,
-  a fast body's swept box) are "large": each is tested against every body
-  in one vectorised comparison instead of filling many cells;
-- a pair sharing several cells is reported once, by the cell holding the
-  lower corner of the intersection of the two boxes;
-- pairs come out sorted by (i, j), so the whole step stays deterministic.
+- the cell edge is the largest AABB extent among the "small" bodies (those
+  at most SMALL_FACTOR × the median extent), so two small boxes that overlap
+  have centres in the same or adjacent cells; each cell is compared with
+  itself and its 13 "forward" neighbours, which reports every pair once;
+- the other bodies (a long static slab, a fast body's swept box) are
+  "large": each is swept along the axis where the centres spread most,
+  against the small bodies sorted by their lower bound on that axis
+  (sort-and-sweep), and against the other large bodies directly;
+- candidate_pairs then keeps pairs whose bounding spheres also overlap and
+  sorts them by (min, max) index, so the whole step stays deterministic.
 
 Planes are infinite and skip the grid: every dynamic body is tested against
 every plane by its lowest point along the plane normal.
@@ -22,8 +25,13 @@ import numpy as np
 from .. import quaternion as qt
 from ..shapes import BOX, PLANE, SPHERE
 
-MAX_SPAN = 4          # cells per axis before a body is handled as "large"
-CELL_QUANTILE = 0.9   # cell size = this quantile of the AABBs' largest extent
+SMALL_FACTOR = 4.0     # a body more than this × the median AABB extent is "large"
+MAX_CELLS = 2 ** 20    # grid cells per axis; a wider scene gets a coarser grid
+DENSE_CELLS_PER_BODY = 64   # up to this many grid cells per body, index cells by a dense table
+
+# Own cell and the 13 neighbours that come after it in (x, y, z) order.
+_FORWARD = np.array([(dx, dy, dz) for dx in (-1, 0, 1) for dy in (-1, 0, 1) for dz in (-1, 0, 1)
+                     if (dx, dy, dz) >= (0, 0, 0)])
 
 
 def aabb_half_extents(model, quat) -> np.ndarray:
@@ -42,91 +50,132 @@ def aabb_half_extents(model, quat) -> np.ndarray:
     return out
 
 
-def overlapping_pairs(lo, hi):
+def bounding_radius(model) -> np.ndarray:
+    """(n,) radius of the sphere about the centre that holds the body (0 for planes)."""
+    r = np.where(model.shape_type == SPHERE, model.radius, np.linalg.norm(model.half_extents, axis=1))
+    return np.where(model.shape_type == PLANE, 0.0, r)
+
+
+def overlapping_pairs(lo, hi, centre=None, reach=None):
     """All pairs (i, j), i < j, of boxes [lo, hi] (each (m, 3)) that overlap
-    (touching counts), as two int64 arrays sorted by (i, j)."""
+    (touching counts), as two int64 arrays in a deterministic order (a
+    function of the input only; candidate_pairs sorts them).
+
+    With `centre` (m, 3) and `reach` (m,), a pair must also have
+    |centre_i - centre_j| <= reach_i + reach_j (bounding spheres); that
+    cheaper test runs first."""
     lo = np.asarray(lo, dtype=float)
     hi = np.asarray(hi, dtype=float)
     m = len(lo)
     if m < 2:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    # one contiguous row per quantity: 1-D gathers of a row beat gathers of (m, 3) rows
+    cols = np.empty((10 if centre is not None else 6, m))
+    cols[_LO] = lo.T
+    cols[_HI] = hi.T
+    if centre is not None:
+        cols[_C] = np.asarray(centre, dtype=float).T
+        cols[_R] = reach
     size = (hi - lo).max(axis=1)
-    cell = float(np.quantile(size, CELL_QUANTILE))
-    if not np.isfinite(cell) or cell <= 0.0:
-        cell = max(float(size.max()), 1e-9) if np.isfinite(size.max()) else 1.0
-    c_lo = np.floor(lo / cell).astype(np.int64)
-    c_hi = np.floor(hi / cell).astype(np.int64)
-    span = c_hi - c_lo + 1
-    large = (span > MAX_SPAN).any(axis=1)
-    parts = [_grid_pairs(np.flatnonzero(~large), lo, hi, c_lo, span, cell)]
-    if large.any():
-        parts.append(_large_pairs(np.flatnonzero(large), large, lo, hi))
+    small = size <= SMALL_FACTOR * np.median(size)
+    cell = float(size[small].max())
+    parts = [_grid_pairs(np.flatnonzero(small), cols, cell)]
+    if not small.all():
+        parts.append(_large_pairs(np.flatnonzero(~small), np.flatnonzero(small), cols, cell))
     i = np.concatenate([p[0] for p in parts])
     j = np.concatenate([p[1] for p in parts])
-    order = np.argsort(i * m + j, kind="stable")
-    return i[order], j[order]
+    return np.minimum(i, j), np.maximum(i, j)
 
 
-def _grid_pairs(small, lo, hi, c_lo, span, cell):
-    """Pairs among the `small` bodies that share a grid cell (each pair once)."""
+_LO, _HI, _C, _R = slice(0, 3), slice(3, 6), slice(6, 9), 9
+
+
+def _filter(cols, p, q):
+    """The index pairs (p, q) into `cols` whose bounding spheres (when
+    `cols` has them) and boxes overlap. In place where it can: the arrays
+    are as long as the candidate list."""
+    if len(cols) > 6:
+        d2 = np.zeros(len(p))
+        for k in (6, 7, 8):
+            d = cols[k].take(p)
+            d -= cols[k].take(q)
+            d *= d
+            d2 += d
+        r = cols[_R].take(p)
+        r += cols[_R].take(q)
+        r *= r
+        keep = d2 <= r
+        p, q = p[keep], q[keep]
+    keep = np.ones(len(p), bool)
+    for k in range(3):
+        keep &= cols[k].take(p) <= cols[3 + k].take(q)
+        keep &= cols[k].take(q) <= cols[3 + k].take(p)
+    return p[keep], q[keep]
+
+
+def _grid_pairs(small, cols, cell):
+    """Pairs among the `small` bodies, by the grid of their centres."""
     empty = (np.zeros(0, np.int64), np.zeros(0, np.int64))
     if len(small) < 2:
         return empty
-    sp = span[small]
-    count = sp.prod(axis=1)
-    body = np.repeat(small, count)
-    # offset of each entry inside its body's block of cells, as (ox, oy, oz)
-    first = np.cumsum(count) - count
-    local = np.arange(len(body)) - np.repeat(first, count)
-    sy = np.repeat(sp[:, 1], count)
-    sz = np.repeat(sp[:, 2], count)
-    cz = c_lo[body, 2] + local % sz
-    rest = local // sz
-    cy = c_lo[body, 1] + rest % sy
-    cx = c_lo[body, 0] + rest // sy
-    cells = np.stack([cx, cy, cz], axis=1)
-    key = _cell_key(cells)
-    order = np.argsort(key, kind="stable")      # stable: bodies ascending inside a cell
-    key, body, cells = key[order], body[order], cells[order]
-    # each entry pairs with the later entries of its cell
-    new_group = np.empty(len(key), bool)
-    new_group[0] = True
-    new_group[1:] = key[1:] != key[:-1]
-    starts = np.flatnonzero(new_group)
-    ends = np.append(starts[1:], len(key))
-    group_end = np.repeat(ends, ends - starts)
-    partners = group_end - np.arange(len(key)) - 1
-    total = int(partners.sum())
+    centre = 0.5 * (cols[_LO].take(small, axis=1) + cols[_HI].take(small, axis=1)).T
+    spread = centre.max(axis=0) - centre.min(axis=0)
+    cell = max(cell, float(spread.max()) / MAX_CELLS, 1e-300)
+    c = np.floor(centre / cell).astype(np.int64)
+    c -= c.min(axis=0) - 1                       # one empty cell of padding on each side:
+    dims = c.max(axis=0) + 2                     # neighbour keys never wrap round an axis
+    stride = np.array([dims[1] * dims[2], dims[2], 1])
+    key = c @ stride
+    order = np.argsort(key, kind="stable")
+    key = key[order]
+    body = small[order]
+    # [start, end) of each forward neighbour cell in the sorted keys
+    nkey = key[:, None] + _FORWARD @ stride      # (s, 14)
+    cells = int(dims.prod())
+    if cells <= DENSE_CELLS_PER_BODY * len(key) + 2 ** 16:
+        # a table of where each cell starts in the sorted keys (counting sort)
+        first = np.zeros(cells + 1, np.int64)
+        np.cumsum(np.bincount(key, minlength=cells), out=first[1:])
+        start, end = first.take(nkey), first.take(nkey + 1)
+    else:
+        start = np.empty_like(nkey)
+        end = np.empty_like(nkey)
+        for k in range(nkey.shape[1]):          # 14 columns, each already sorted
+            start[:, k] = np.searchsorted(key, nkey[:, k], side="left")
+            end[:, k] = np.searchsorted(key, nkey[:, k], side="right")
+    start[:, 0] = np.arange(len(key)) + 1        # own cell: only the later entries
+    count = end - start
+    flat = count.ravel()
+    total = int(flat.sum())
     if total == 0:
         return empty
-    p = np.repeat(np.arange(len(key)), partners)
-    q = p + 1 + (np.arange(total) - np.repeat(np.cumsum(partners) - partners, partners))
-    i, j = body[p], body[q]
-    # report the pair only in the cell holding the lower corner of the overlap
-    corner = np.floor(np.maximum(lo[i], lo[j]) / cell).astype(np.int64)
-    keep = (corner == cells[p]).all(axis=1)
-    keep &= (lo[i] <= hi[j]).all(axis=1) & (lo[j] <= hi[i]).all(axis=1)
-    return i[keep], j[keep]
+    q = np.repeat(start.ravel() - (np.cumsum(flat) - flat), flat)
+    q += np.arange(total)
+    p = np.repeat(np.repeat(np.arange(len(key)), _FORWARD.shape[0]), flat)
+    # candidates index the cell-sorted copy, which keeps neighbours close in memory
+    p, q = _filter(cols.take(body, axis=1), p, q)
+    return body.take(p), body.take(q)
 
 
-def _cell_key(cells):
-    """One int64 per cell coordinate triple (dense when the grid is small)."""
-    c = cells - cells.min(axis=0)
-    dims = c.max(axis=0) + 1
-    if float(dims[0]) * float(dims[1]) * float(dims[2]) < 2.0 ** 62:
-        return (c[:, 0] * dims[1] + c[:, 1]) * dims[2] + c[:, 2]
-    return np.unique(c, axis=0, return_inverse=True)[1].reshape(-1).astype(np.int64)
-
-
-def _large_pairs(big, large, lo, hi):
-    """Each large body against every body, in one (len(big), m) comparison."""
-    hit = ((lo[big, None, :] <= hi[None, :, :]) & (lo[None, :, :] <= hi[big, None, :])).all(axis=2)
-    r, j = np.nonzero(hit)
-    i = big[r]
-    # drop self pairs; a large–large pair is kept once, from its lower index
-    keep = (i != j) & ~(large[j] & (j < i))
-    i, j = i[keep], j[keep]
-    return np.minimum(i, j), np.maximum(i, j)
+def _large_pairs(big, small, cols, cell):
+    """Large bodies: swept along the axis where centres spread most against
+    the small bodies (a small body's lower bound lies within `cell` below
+    any point it covers), and compared directly with each other."""
+    axis = int(np.argmax(np.var(cols[_LO] + cols[_HI], axis=1)))
+    sweep = cols[axis].take(small)
+    order = np.argsort(sweep, kind="stable")
+    sweep, sorted_small = sweep[order], small[order]
+    start = np.searchsorted(sweep, cols[axis].take(big) - cell, side="left")
+    end = np.searchsorted(sweep, cols[3 + axis].take(big), side="right")
+    count = end - start
+    total = int(count.sum())
+    q = np.repeat(start - (np.cumsum(count) - count), count) + np.arange(total)
+    i, j = np.repeat(big, count), sorted_small.take(q)
+    # large against large: the (L, L) upper triangle
+    bi, bj = np.triu_indices(len(big), k=1)
+    i = np.concatenate([i, big[bi]])
+    j = np.concatenate([j, big[bj]])
+    return _filter(cols, i, j)
 
 
 def plane_pairs(model, pos, quat, margin: float = 0.0, bodies=None):
@@ -161,20 +210,25 @@ def support_along(model, quat, bodies, directions):
 
 def candidate_pairs(model, pos, quat, margin: float = 0.0):
     """Pairs that may be within `margin` of touching, in the Manifold order
-    (static body, or the lower index, first), sorted by (min, max) index."""
+    (static body, or the lower index, first), sorted by (min, max) index.
+
+    Solid pairs need overlapping margin-grown AABBs and bounding spheres
+    (|c_a - c_b| <= R_a + R_b + margin); static–static pairs are dropped."""
     pos = np.asarray(pos, dtype=float)
     solid = np.flatnonzero(model.shape_type != PLANE)
     half = aabb_half_extents(model, quat)[solid] + 0.5 * margin
-    i, j = overlapping_pairs(pos[solid] - half, pos[solid] + half)
-    i, j = solid[i], solid[j]
+    p = pos[solid]
+    i, j = overlapping_pairs(p - half, p + half, p, bounding_radius(model)[solid] + 0.5 * margin)
+    i, j = solid.take(i), solid.take(j)
     static = model.is_static
-    keep = ~(static[i] & static[j])
+    keep = ~(static.take(i) & static.take(j))
     i, j = i[keep], j[keep]
-    flip = static[j] & ~static[i]
+    flip = static.take(j) & ~static.take(i)
     a = np.where(flip, j, i)
     b = np.where(flip, i, j)
     pa, pb = plane_pairs(model, pos, quat, margin)
-    a = np.concatenate([a, pa])
-    b = np.concatenate([b, pb])
+    if len(pa):
+        a = np.concatenate([a, pa])
+        b = np.concatenate([b, pb])
     order = np.argsort(np.minimum(a, b) * model.n + np.maximum(a, b), kind="stable")
     return a[order], b[order]

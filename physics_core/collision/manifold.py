@@ -54,7 +54,10 @@ class Manifold:
 
     def take(self, index) -> "Manifold":
         """The rows `index` (an index array or a boolean mask), in that order."""
-        return Manifold(**{f.name: getattr(self, f.name)[index] for f in fields(Manifold)})
+        index = np.asarray(index)
+        if index.dtype == bool:
+            index = np.flatnonzero(index)
+        return Manifold(**{f.name: getattr(self, f.name).take(index, axis=0) for f in fields(Manifold)})
 
     def sorted_by_key(self) -> "Manifold":
         return self.take(np.argsort(self.key, kind="stable"))

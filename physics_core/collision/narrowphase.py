@@ -112,12 +112,12 @@ def plane_box(model, f, s, pf, qf, ps, qs, margin=0.0):
     return row, vertex.astype(np.int64), point, n[row], -h
 
 
-KERNELS = (
-    (SPHERE, SPHERE, sphere_sphere),
-    (PLANE, SPHERE, plane_sphere),
-    (PLANE, BOX, plane_box),
-    (BOX, SPHERE, box_sphere),
-    (BOX, BOX, box_box),
+KERNELS = (   # (first shape, second shape, kernel, uses orientations)
+    (SPHERE, SPHERE, sphere_sphere, False),
+    (PLANE, SPHERE, plane_sphere, False),
+    (PLANE, BOX, plane_box, True),
+    (BOX, SPHERE, box_sphere, True),
+    (BOX, BOX, box_box, True),
 )
 
 
@@ -129,29 +129,53 @@ def _kind_rows(ta, tb, first, second):
     return direct, np.flatnonzero((ta == second) & (tb == first))
 
 
-def _kernel_rows(model, a, b, pa, qa, pb, qb, margin):
-    """(pair, slot, point, normal a→b, depth) over every kernel, grouped by kind."""
-    ta, tb = model.shape_type[a], model.shape_type[b]
+def _gather(direct, swapped, x, y):
+    """x's rows `direct`, then y's rows `swapped` (the kernel's "first" side)."""
+    if len(swapped) == 0:
+        return x.take(direct, axis=0)
+    return np.concatenate([x.take(direct, axis=0), y.take(swapped, axis=0)])
+
+
+def _kernel_rows(model, a, b, margin, pos=None, quat=None, pair_poses=None):
+    """(pair, slot, point, normal a→b, depth) over every kernel, grouped by kind.
+
+    Poses come either per body (pos, quat indexed by body) or per pair
+    (pair_poses = (pa, qa, pb, qb), one row per pair)."""
+    ta, tb = model.shape_type.take(a), model.shape_type.take(b)
     parts = []
-    for first, second, kernel in KERNELS:
+    for first, second, kernel, turns in KERNELS:
         direct, swapped = _kind_rows(ta, tb, first, second)
         if len(direct) + len(swapped) == 0:
             continue
-        idx = np.concatenate([direct, swapped])
-        flip = np.arange(len(idx)) >= len(direct)
-        f = np.where(flip, b[idx], a[idx])
-        s = np.where(flip, a[idx], b[idx])
-        pf = np.where(flip[:, None], pb[idx], pa[idx])
-        qf = np.where(flip[:, None], qb[idx], qa[idx])
-        ps = np.where(flip[:, None], pa[idx], pb[idx])
-        qs = np.where(flip[:, None], qa[idx], qb[idx])
+        f, s = _gather(direct, swapped, a, b), _gather(direct, swapped, b, a)
+        qf = qs = None
+        if pair_poses is None:
+            pf, ps = pos.take(f, axis=0), pos.take(s, axis=0)
+            if turns:
+                qf, qs = quat.take(f, axis=0), quat.take(s, axis=0)
+        else:
+            pa, qa, pb, qb = pair_poses
+            pf, ps = _gather(direct, swapped, pa, pb), _gather(direct, swapped, pb, pa)
+            if turns:
+                qf, qs = _gather(direct, swapped, qa, qb), _gather(direct, swapped, qb, qa)
         row, slot, point, normal, depth = kernel(model, f, s, pf, qf, ps, qs, margin)
-        normal = np.where(flip[row, None], -normal, normal)
-        parts.append((idx[row], slot, point, normal, depth))
+        if len(swapped):
+            normal = np.where((row >= len(direct))[:, None], -normal, normal)
+        idx = direct if len(swapped) == 0 else np.concatenate([direct, swapped])
+        parts.append((idx.take(row), slot, point, normal, depth))
     if not parts:
         z = np.zeros(0, np.int64)
         return z, z, np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
+    if len(parts) == 1:
+        return parts[0]
     return tuple(np.concatenate(col) for col in zip(*parts))
+
+
+def _manifold(model, a, b, rows) -> Manifold:
+    pair, slot, point, normal, depth = rows
+    a, b = a.take(pair), b.take(pair)
+    return Manifold(a=a, b=b, point=point, normal=normal, depth=depth,
+                    key=pair_key(a, b, model.n, slot))
 
 
 def contacts(model, a, b, pa, qa, pb, qb, margin: float = 0.0) -> Manifold:
@@ -161,9 +185,7 @@ def contacts(model, a, b, pa, qa, pb, qb, margin: float = 0.0) -> Manifold:
     single-point kinds) and unsorted; `collide` filters and sorts."""
     a = np.asarray(a, dtype=np.int64)
     b = np.asarray(b, dtype=np.int64)
-    pair, slot, point, normal, depth = _kernel_rows(model, a, b, pa, qa, pb, qb, margin)
-    return Manifold(a=a[pair], b=b[pair], point=point, normal=normal, depth=depth,
-                    key=pair_key(a[pair], b[pair], model.n, slot))
+    return _manifold(model, a, b, _kernel_rows(model, a, b, margin, pair_poses=(pa, qa, pb, qb)))
 
 
 def collide(model, pos, quat, margin: float = 0.0) -> Manifold:
@@ -171,8 +193,11 @@ def collide(model, pos, quat, margin: float = 0.0) -> Manifold:
     a, b = candidate_pairs(model, pos, quat, margin)
     if len(a) == 0:
         return Manifold.empty()
-    m = contacts(model, a, b, pos[a], quat[a], pos[b], quat[b], margin)
-    return m.take(m.depth > -margin).sorted_by_key()
+    rows = _kernel_rows(model, a, b, margin, pos=pos, quat=quat)
+    keep = np.flatnonzero(rows[4] > -margin)
+    m = _manifold(model, a, b, tuple(c.take(keep, axis=0) for c in rows))
+    # pairs come sorted; rows need a sort only when several kinds or slots interleave
+    return m if np.all(m.key[1:] > m.key[:-1]) else m.sorted_by_key()
 
 
 def signed_depth(model, a, b, pa, qa, pb, qb) -> np.ndarray:
@@ -190,8 +215,8 @@ def signed_depth(model, a, b, pa, qa, pb, qb) -> np.ndarray:
     rest = np.flatnonzero(~bb)
     if len(rest):
         # the deepest contact row of each pair, with no margin cut
-        pair, _, _, _, depth = _kernel_rows(model, a[rest], b[rest], pa[rest], qa[rest],
-                                            pb[rest], qb[rest], np.inf)
+        pair, _, _, _, depth = _kernel_rows(model, a[rest], b[rest], np.inf,
+                                            pair_poses=(pa[rest], qa[rest], pb[rest], qb[rest]))
         np.maximum.at(out, rest[pair], depth)
     return out
 
