@@ -5,7 +5,10 @@ momentum L = I_w ω with I_w = R diag(I) Rᵀ. Working with L makes the
 gyroscopic term exact: with no torque L stays constant whatever the
 integrator, and ω = I_w⁻¹ L follows the orientation, which gives the
 intermediate-axis flip of an asymmetric body (COURSE.md 3). Orientation is
-advanced by the exact exponential map of ω h, so it stays a unit quaternion.
+advanced by the exact exponential map of ω h, so it stays a unit quaternion;
+semi-implicit Euler and velocity Verlet advance it by the torque-free
+splitting of free_rotation.py between torque kicks, so that, like their
+translational update, they keep the energy of a free body bounded.
 
 Each integrator calls `sys.forces(x, q, v, ω) -> (F, τ)` as often as its
 order needs (1 for the Euler pair, 2 for velocity Verlet, 4 for RK4).
@@ -14,6 +17,7 @@ skipped (`sys.rotating` false).
 """
 import numpy as np
 
+from . import free_rotation
 from . import quaternion as qt
 
 
@@ -44,9 +48,7 @@ def semi_implicit_euler(sys, h):
     s.pos += s.vel * h
     if sys.rotating:
         L = angular_momentum(s.quat, sys.inertia, s.omega) + T * h
-        omega = angular_velocity(s.quat, sys.inv_inertia, L)
-        s.quat = qt.integrate(s.quat, omega, h)
-        s.omega = angular_velocity(s.quat, sys.inv_inertia, L)
+        s.quat, s.omega = free_rotation.advance(s.quat, L, sys.inv_inertia, h, sys.isotropic)
 
 
 def velocity_verlet(sys, h):
@@ -61,7 +63,7 @@ def velocity_verlet(sys, h):
     s.pos += v_half * h
     if sys.rotating:
         L_half = angular_momentum(s.quat, sys.inertia, s.omega) + 0.5 * h * T0
-        s.quat = qt.integrate(s.quat, angular_velocity(s.quat, sys.inv_inertia, L_half), h)
+        s.quat, _ = free_rotation.advance(s.quat, L_half, sys.inv_inertia, h, sys.isotropic)
         omega_pred = angular_velocity(s.quat, sys.inv_inertia, L_half + 0.5 * h * T0)
     else:
         omega_pred = s.omega
