@@ -1,0 +1,5 @@
+"""Continuous collision (placeholder until time of impact lands)."""
+
+
+def ccd(world, h, params, scratch):
+    return

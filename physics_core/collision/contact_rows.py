@@ -1,0 +1,167 @@
+"""Contact constraints of one (sub)step as rows of a velocity solver (COURSE.md 5).
+
+Each contact point has three rows: the normal n and two tangents t1, t2.
+Body velocities are 6-vectors V = (v, ω) (world frame); a row's relative
+velocity is J_A·V_A + J_B·V_B with
+
+    J_A = −(d, r_A × d),   J_B = (d, r_B × d)
+
+for its direction d, i.e. d·(v̄_B − v̄_A) with the contact-point velocities
+v̄ = v + ω × r of the course. An impulse λ along the rows changes the
+velocities by M⁻¹Jᵀλ, M⁻¹ = diag(1/m, I_w⁻¹), I_w⁻¹ = R diag(I⁻¹) Rᵀ: the
+course's `v± = v∓ ± j n / m`, `ω± = ω∓ ± I⁻¹ (r × j n)`. The 3×3 block
+W = J_A M_A⁻¹ J_Aᵀ + J_B M_B⁻¹ J_Bᵀ couples the rows; its normal entry is
+the course's denominator `1/m_A + 1/m_B + [(I_A⁻¹(r_A×n))×r_A + (I_B⁻¹(r_B×n))×r_B]·n`.
+Static and sleeping bodies have M⁻¹ = 0 (infinite mass, COURSE.md 5).
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import quaternion as qt
+from . import friction, restitution
+
+_TINY = 1e-30
+
+
+@dataclass
+class ContactRows:
+    a: np.ndarray          # (k,) body indices, normal from a towards b
+    b: np.ndarray
+    key: np.ndarray        # (k,) Manifold feature key
+    point: np.ndarray      # (k, 3) m
+    normal: np.ndarray     # (k, 3)
+    tangent: np.ndarray    # (k, 2, 3) t1, t2
+    depth: np.ndarray      # (k,) m, at the detected pose (> 0 overlapping)
+    ab: np.ndarray         # (k, 2) the two bodies, to gather (V_a, V_b) as one 12-vector
+    J: np.ndarray          # (k, 3, 12) rows n, t1, t2: (J_A | J_B)
+    M: np.ndarray          # (k, 3, 12) (M_A⁻¹ J_Aᵀ | M_B⁻¹ J_Bᵀ) as rows: Δ(V_a, V_b) per unit impulse
+    mass_n: np.ndarray     # (k,) 1 / W_nn, the normal's effective mass, kg
+    w_tn: np.ndarray       # (k, 2) W_tn: tangential velocity change per unit normal impulse
+    wtt_inv: np.ndarray    # (k, 2, 2) inverse of the tangent block
+    mu_s: np.ndarray       # (k,)
+    mu_k: np.ndarray
+    e: np.ndarray          # (k,) pair C_R (before the resting-contact rule)
+    u0: np.ndarray         # (k, 3) row velocities before the solve (u0[:, 0] > 0 separating), m/s
+    bias: np.ndarray       # (k,) least normal velocity the solve must reach, m/s
+    lam: np.ndarray        # (k, 3) accumulated impulses of the rows, N·s
+    bounds: np.ndarray     # batch boundaries (rows are sorted by batch)
+
+    def __len__(self):
+        return len(self.a)
+
+    @property
+    def JA(self):
+        return self.J[:, :, :6]
+
+    @property
+    def JB(self):
+        return self.J[:, :, 6:]
+
+    @property
+    def MA(self):
+        return self.M[:, :, :6]
+
+    @property
+    def MB(self):
+        return self.M[:, :, 6:]
+
+
+def world_inverse_inertia(quat, inv_inertia):
+    """(n, 3, 3) I_w⁻¹ = R diag(I⁻¹) Rᵀ (COURSE.md 3)."""
+    R = qt.to_matrix(quat)
+    return (R * inv_inertia[:, None, :]) @ R.transpose(0, 2, 1)
+
+
+def body_velocities(state):
+    """(n, 6) stacked (v, ω)."""
+    return np.concatenate([state.vel, state.omega], axis=1)
+
+
+def _cross_rows(r, D):
+    """(k, 3, 3): r × d for each row d of D (k, 3, 3), r (k, 3)."""
+    out = np.empty_like(D)
+    rx, ry, rz = r[:, 0:1], r[:, 1:2], r[:, 2:3]
+    dx, dy, dz = D[:, :, 0], D[:, :, 1], D[:, :, 2]
+    out[:, :, 0] = ry * dz - rz * dy
+    out[:, :, 1] = rz * dx - rx * dz
+    out[:, :, 2] = rx * dy - ry * dx
+    return out
+
+
+def _angular_rows(J_ang, bodies, inv_inertia_w, iso_inv):
+    """Rows of I_w⁻¹ (r × d) for the bodies of each contact: a scalar product for
+    bodies with equal principal moments (spheres, cubes), a 3×3 product otherwise."""
+    if inv_inertia_w is None:
+        return J_ang * iso_inv[bodies][:, None, None]
+    return J_ang @ inv_inertia_w[bodies]          # I_w⁻¹ is symmetric
+
+
+def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=None, rewound=None):
+    """Rows for manifold `m` (already in batch order) at positions `pos`.
+
+    inv_mass (n,): the solver's inverse masses (zero for static and sleeping
+    bodies); inverse inertia either `inv_inertia_w` (n, 3, 3) world tensors or,
+    when that is None (every body isotropic), `iso_inv` (n,) scalars. `split`
+    (n,) multiplies each body's inverse mass in the effective masses only
+    (Jacobi mass splitting). The normal row's target `bias` keeps the pair
+    from overlapping at the end of the step (speculative contact, see
+    collision/__init__)."""
+    a, b, n = m.a, m.b, m.normal
+    k = len(a)
+    t1, t2 = friction.tangent_basis(n)
+    D = np.stack([n, t1, t2], axis=1)                      # (k, 3 rows, 3)
+    rA = m.point - pos[a]
+    rB = m.point - pos[b]
+    J = np.empty((k, 3, 12))
+    J[:, :, 0:3] = -D
+    J[:, :, 3:6] = -_cross_rows(rA, D)
+    J[:, :, 6:9] = D
+    J[:, :, 9:12] = _cross_rows(rB, D)
+    M = np.empty((k, 3, 12))
+    M[:, :, 0:3] = J[:, :, 0:3] * inv_mass[a][:, None, None]
+    M[:, :, 3:6] = _angular_rows(J[:, :, 3:6], a, inv_inertia_w, iso_inv)
+    M[:, :, 6:9] = J[:, :, 6:9] * inv_mass[b][:, None, None]
+    M[:, :, 9:12] = _angular_rows(J[:, :, 9:12], b, inv_inertia_w, iso_inv)
+    # each body's part of the normal's inverse effective mass (the course's
+    # denominator is their sum); they also weight the two restitutions
+    k_a = np.einsum("ki,ki->k", J[:, 0, :6], M[:, 0, :6])
+    k_b = np.einsum("ki,ki->k", J[:, 0, 6:], M[:, 0, 6:])
+    if split is not None:
+        Ms = M.copy()
+        Ms[:, :, :6] *= split[a][:, None, None]
+        Ms[:, :, 6:] *= split[b][:, None, None]
+    else:
+        Ms = M
+    W = np.empty((k, 3, 3))
+    for c in range(3):
+        W[:, :, c] = np.einsum("kri,ki->kr", J, Ms[:, c, :])
+    mass_n = 1.0 / np.maximum(W[:, 0, 0], _TINY)
+    w_tn = W[:, 1:, 0]
+    det = W[:, 1, 1] * W[:, 2, 2] - W[:, 1, 2] * W[:, 2, 1]
+    inv_det = 1.0 / np.where(np.abs(det) > _TINY, det, _TINY)
+    wtt_inv = np.empty((k, 2, 2))
+    wtt_inv[:, 0, 0] = W[:, 2, 2] * inv_det
+    wtt_inv[:, 1, 1] = W[:, 1, 1] * inv_det
+    wtt_inv[:, 0, 1] = -W[:, 1, 2] * inv_det
+    wtt_inv[:, 1, 0] = -W[:, 2, 1] * inv_det
+    mu_s, mu_k = friction.coefficients(model, a, b)
+    e = restitution.pair_restitution(model, a, b, k_a, k_b, params.restitution_combine)
+    ab = np.stack([a, b], axis=1)
+    u0 = np.einsum("kri,ki->kr", J, V[ab].reshape(k, 12))
+    # Separation at the start of the step, linearised: the detected (end) pose
+    # came from moving with u0, so s0 = s_end − h u0_n. A body moved back to its
+    # time of impact already sits at the start of its remaining motion.
+    sep_end = -m.depth
+    s0 = sep_end - h * u0[:, 0]
+    if rewound is not None:
+        rw = rewound[a] | rewound[b]
+        s0 = np.where(rw, sep_end, s0)
+    # vn ≥ −s0/h: approach no faster than closes the gap in this step;
+    # already overlapping (s0 < 0): just stop approaching, the overlap is
+    # removed by the position pass, never by adding velocity.
+    bias = -np.maximum(s0, 0.0) / h
+    return ContactRows(a=a, b=b, key=m.key, point=m.point, normal=n, tangent=D[:, 1:, :],
+                       depth=m.depth, ab=ab, J=J, M=M, mass_n=mass_n, w_tn=w_tn,
+                       wtt_inv=wtt_inv, mu_s=mu_s, mu_k=mu_k, e=e, u0=u0, bias=bias,
+                       lam=np.zeros((k, 3)), bounds=np.array([0, k]))

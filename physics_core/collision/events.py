@@ -1,0 +1,98 @@
+"""Contact events of a step (contact_events.ContactEvents), gathered over its substeps.
+
+A contact is identified by its Manifold key (pair and feature). It is
+"touching" in a substep when the pair overlaps at the detected pose or the
+solver pushed on it (λ_n > 0, which includes a speculative contact about to
+close). Over one step: `begin` if it touches now and did not in the previous
+step, `persist` if it did, `end` (zero impulse, last known point) if it
+touched in the previous step and not in this one. Impulses are summed over
+the substeps; the friction impulse is the length of the summed tangential
+impulse vector; point, normal and depth are the last substep's; the normal
+speed is the largest approach speed seen (before the solve, > 0 closing).
+"""
+import numpy as np
+
+from ..contact_events import BEGIN, END, PERSIST, ContactEvents
+
+
+class EventAccumulator:
+    def __init__(self):
+        self.parts = []
+        self.prev = None        # last step's touching contacts, sorted by key
+
+    def reset(self):
+        self.parts = []
+
+    def add(self, rows):
+        """Record the touching contacts of one substep (after its solve)."""
+        if not len(rows):
+            return
+        lam = rows.lam
+        touching = (rows.depth >= 0.0) | (lam[:, 0] > 0.0)
+        if not touching.any():
+            return
+        t = np.flatnonzero(touching)
+        t = t[np.argsort(rows.key[t], kind="stable")]
+        ft = lam[t, 1:2] * rows.tangent[t, 0] + lam[t, 2:3] * rows.tangent[t, 1]
+        self.parts.append(dict(
+            key=rows.key[t], a=rows.a[t], b=rows.b[t], point=rows.point[t], normal=rows.normal[t],
+            depth=rows.depth[t], impulse=lam[t, 0], friction=ft,
+            speed=-rows.u0[t, 0]))
+
+    def finish(self) -> ContactEvents:
+        """The step's events; also remembers them for the next step's begin/end."""
+        cur = self._merge()
+        prev = self.prev
+        if cur is None and prev is None:
+            self.parts = []
+            return ContactEvents.empty()
+        cols = {}
+        if cur is not None:
+            known = _member(cur["key"], prev["key"]) if prev is not None else np.zeros(len(cur["key"]), bool)
+            ev = np.where(known, PERSIST, BEGIN).astype(np.uint8)
+            cols = dict(point=cur["point"], normal=cur["normal"], impulse=cur["impulse"],
+                        friction_impulse=np.sqrt(np.einsum("ij,ij->i", cur["friction"], cur["friction"])),
+                        normal_speed=cur["speed"], depth=cur["depth"], body_a=cur["a"],
+                        body_b=cur["b"], event=ev)
+        if prev is not None:
+            gone = ~_member(prev["key"], cur["key"]) if cur is not None else np.ones(len(prev["key"]), bool)
+            if gone.any():
+                g = np.flatnonzero(gone)
+                z = np.zeros(len(g))
+                end = dict(point=prev["point"][g], normal=prev["normal"][g], impulse=z,
+                           friction_impulse=z, normal_speed=z, depth=prev["depth"][g],
+                           body_a=prev["a"][g], body_b=prev["b"][g],
+                           event=np.full(len(g), END, dtype=np.uint8))
+                cols = end if not cols else {k: np.concatenate([cols[k], end[k]]) for k in cols}
+        self.prev = cur
+        self.parts = []
+        if not cols:
+            return ContactEvents.empty()
+        return ContactEvents(**cols)
+
+    def _merge(self):
+        if not self.parts:
+            return None
+        if len(self.parts) == 1:
+            return self.parts[0]
+        cat = {k: np.concatenate([p[k] for p in self.parts]) for k in self.parts[0]}
+        keys, inv = np.unique(cat["key"], return_inverse=True)
+        m = len(keys)
+        last = np.zeros(m, dtype=np.int64)
+        np.maximum.at(last, inv, np.arange(len(inv)))   # later substeps come later
+        impulse = np.bincount(inv, cat["impulse"], m)
+        fr = np.stack([np.bincount(inv, cat["friction"][:, c], m) for c in range(3)], axis=1)
+        speed = np.full(m, -np.inf)
+        np.maximum.at(speed, inv, cat["speed"])
+        return dict(key=keys, a=cat["a"][last], b=cat["b"][last], point=cat["point"][last],
+                    normal=cat["normal"][last], depth=cat["depth"][last], impulse=impulse,
+                    friction=fr, speed=speed)
+
+
+def _member(keys, sorted_ref):
+    """(len(keys),) bool: which keys appear in the sorted array `sorted_ref`."""
+    if sorted_ref is None or not len(sorted_ref):
+        return np.zeros(len(keys), bool)
+    i = np.searchsorted(sorted_ref, keys)
+    i = np.minimum(i, len(sorted_ref) - 1)
+    return sorted_ref[i] == keys

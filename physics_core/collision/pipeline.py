@@ -1,0 +1,203 @@
+"""The contact stages of a substep, over the arrays of one World (see __init__)."""
+import numpy as np
+
+from .. import quaternion as qt
+from . import contact_rows, restitution, sleep, solver
+from .coloring import batches, color_contacts
+from .events import EventAccumulator
+from .manifold import detect
+from .warm_start import WarmCache
+
+SCRATCH_KEY = "contacts"
+
+
+class ContactScratch:
+    """What the contact stages keep between substeps and steps (in State.scratch,
+    so World.reset() starts afresh)."""
+
+    def __init__(self, n):
+        self.warm = WarmCache()
+        self.events = EventAccumulator()
+        self.sleep = sleep.SleepState(n)
+        self.rows = None          # this substep's ContactRows (None: no contact)
+        self.V = None             # (n, 6) velocities being solved
+        self.V0 = None            # (n, 6) velocities the integrator moved the bodies with
+        self.rewound = None       # (n,) bool: bodies the ccd stage moved back this substep
+        self.bounce = None        # (bodies, τ) of this substep's restitution contacts
+        self.colour_key = None    # colouring cache: keys and awake set it was made for
+        self.colour_awake = None
+        self.colour = None
+
+
+class ContactPipeline:
+    def __init__(self, model, params):
+        self.model = model
+        self.p = params
+        self.summed = params.solver == "jacobi"
+        # bodies whose principal moments are equal have I_w⁻¹ = I⁻¹ 1 in any pose
+        I = model.inertia
+        self.isotropic = bool(np.all(np.ptp(I, axis=1) <= 1e-12 * np.max(I, axis=1)))
+
+    def stages(self):
+        out = []
+        if self.p.ccd:
+            from .ccd_stage import ccd
+            out.append(("ccd", lambda world, h: ccd(world, h, self.p, self.scratch(world))))
+        out += [("collide", self.collide), ("solve", self.solve),
+                ("restitution", self.restitution), ("correct", self.correct),
+                ("events", self.events)]
+        if self.p.sleep:
+            out.append(("sleep", self.sleep))
+        return out
+
+    def scratch(self, world) -> ContactScratch:
+        sc = world.state.scratch.get(SCRATCH_KEY)
+        if sc is None:
+            sc = world.state.scratch[SCRATCH_KEY] = ContactScratch(self.model.n)
+        return sc
+
+    @staticmethod
+    def _last_substep(world):
+        return world.substep == getattr(world, "substeps", world.model.substeps) - 1
+
+    # ---- collide -----------------------------------------------------------
+    def collide(self, world, h):
+        model, s, p = self.model, world.state, self.p
+        sc = self.scratch(world)
+        if world.substep == 0:
+            sc.events.reset()
+        if p.sleep:
+            sc.sleep.sync(s.awake)
+        m = detect(model, s.pos, s.quat, p.margin)
+        if p.sleep and len(m):
+            sleep.wake_touched(world, sc.sleep, m.a, m.b, m.depth, p)
+        moving = ~model.is_static & s.awake
+        if len(m):
+            keep = moving[m.a] | moving[m.b]
+            if not keep.all():
+                m = m.take(keep)
+        sc.rows = None
+        sc.bounce = None
+        if not len(m):
+            sc.warm.clear()
+            sc.rewound = None
+            return
+        order, bounds = self._batches(sc, m, moving)
+        m = m.take(order)
+        V = contact_rows.body_velocities(s)
+        sc.V0 = V.copy()
+        inv_mass = world.inv_mass[:, 0]
+        split = None
+        if self.summed:
+            split = np.maximum(np.bincount(m.a[moving[m.a]], minlength=model.n)
+                               + np.bincount(m.b[moving[m.b]], minlength=model.n), 1)
+        if self.isotropic:
+            iw, iso = None, world.inv_inertia[:, 0]
+        else:
+            iw, iso = contact_rows.world_inverse_inertia(s.quat, world.inv_inertia), None
+        rows = contact_rows.build(model, m, s.pos, inv_mass, iw, iso, V, h, p, split, sc.rewound)
+        rows.bounds = bounds
+        sc.warm.load(rows, p.warm_start)
+        sc.rows, sc.V = rows, V
+
+    def _batches(self, sc, m, moving):
+        k = len(m)
+        if self.summed:
+            return np.arange(k), np.array([0, k])
+        if (sc.colour is not None and np.array_equal(sc.colour_key, m.key)
+                and np.array_equal(sc.colour_awake, moving)):
+            return sc.colour
+        u = np.where(moving[m.a], m.a, -1)
+        w = np.where(moving[m.b], m.b, -1)
+        sc.colour = batches(color_contacts(u, w, self.model.n))
+        sc.colour_key, sc.colour_awake = m.key, moving
+        return sc.colour
+
+    # ---- solve -------------------------------------------------------------
+    def solve(self, world, h):
+        sc = self.scratch(world)
+        rows = sc.rows
+        if rows is None:
+            return
+        solver.warm_start(sc.V, rows, self.summed)
+        solver.solve_velocities(sc.V, rows, self.p.iterations, self.summed)
+        sc.warm.store(rows)
+
+    def restitution(self, world, h):
+        sc = self.scratch(world)
+        rows = sc.rows
+        if rows is None:
+            return
+        approach = -rows.u0[:, 0]
+        e = restitution.effective(rows.e, approach, self.p.restitution_threshold,
+                                  self.p.restitution_ramp)
+        active = (e > 0.0) & (rows.lam[:, 0] > 0.0)
+        sc.bounce = None
+        if active.any():
+            solver.solve_normal_targets(sc.V, rows, e * approach, active, 1, self.summed)
+            # Fraction of the substep before the surfaces met (COURSE.md 5, time of
+            # collision): s0 = s_end + h·approach closes at that speed. The bodies
+            # move with the old velocity until then and with the new one after.
+            i = np.flatnonzero(active)
+            s0 = approach[i] * h - rows.depth[i]
+            tau = np.clip(s0 / np.maximum(approach[i] * h, 1e-300), 0.0, 1.0)
+            sc.bounce = (np.concatenate([rows.a[i], rows.b[i]]), np.concatenate([tau, tau]))
+
+    # ---- correct -----------------------------------------------------------
+    def correct(self, world, h):
+        """Velocities written back; positions moved by (v − u0) h, then overlap
+        beyond `slop` pushed out by pseudo-velocities (split impulse)."""
+        sc = self.scratch(world)
+        rows = sc.rows
+        if rows is None:
+            sc.rewound = None
+            return
+        s, p = world.state, self.p
+        V = sc.V
+        dV = V - sc.V0
+        s.vel = np.ascontiguousarray(V[:, :3])
+        s.omega = np.ascontiguousarray(V[:, 3:])
+        if sc.bounce is not None:
+            # a bounce acts from its time of impact τ h on: the end pose is the
+            # impact pose plus the new velocity over the rest of the substep
+            body, tau = sc.bounce
+            after = np.zeros(len(V))
+            np.maximum.at(after, body, 1.0 - tau)
+            hit = np.zeros(len(V), bool)
+            hit[body] = True
+            dV *= np.where(hit, after, 1.0)[:, None]
+        if sc.rewound is not None:
+            dV[sc.rewound] = 0.0     # moved back to their time of impact: stay there
+        dsep = np.einsum("ki,ki->k", rows.J[:, 0, :], dV[rows.ab].reshape(-1, 12)) * h
+        sep = dsep - rows.depth
+        target = np.minimum(p.correction_rate * (-sep - p.slop) / h, p.max_correction_speed)
+        dX = dV
+        if p.position_iterations and (target > 0.0).any():
+            Vp = np.zeros_like(V)
+            solver.solve_pseudo(Vp, rows, np.maximum(target, 0.0), p.position_iterations, self.summed)
+            dX = dV + Vp
+        s.pos += dX[:, :3] * h
+        turn = np.flatnonzero(dX[:, 3:].any(axis=1))
+        if len(turn):
+            s.quat[turn] = qt.integrate(s.quat[turn], dX[turn, 3:], h)
+        sc.rewound = None
+
+    # ---- events and sleep --------------------------------------------------
+    def events(self, world, h):
+        sc = self.scratch(world)
+        if sc.rows is not None:
+            sc.events.add(sc.rows)
+        if self._last_substep(world):
+            world.contacts = sc.events.finish()
+
+    def sleep(self, world, h):
+        if not self._last_substep(world):
+            return
+        sc = self.scratch(world)
+        rows = sc.rows
+        if rows is None:
+            ea = eb = np.zeros(0, dtype=np.int64)
+        else:
+            touching = (rows.depth >= 0.0) | (rows.lam[:, 0] > 0.0)
+            ea, eb = rows.a[touching], rows.b[touching]
+        sleep.update(world, sc.sleep, ea, eb, world.model.dt, self.p)
