@@ -32,6 +32,7 @@ class PushAndFollow(Node):
         self.command = self.create_publisher(WrenchStamped, f"{base}/{kind}", 10)
         self.create_subscription(Odometry, f"{base}/odom", self.on_odom, 10)
         self.pushed_at = None  # sim seconds
+        self.latest_stamp = None  # sim seconds of the newest odometry
         self.last_print = -1.0
         self.done = False
 
@@ -45,6 +46,7 @@ class PushAndFollow(Node):
 
     def on_odom(self, msg):
         t = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+        self.latest_stamp = t
         if self.pushed_at is None or t < self.pushed_at:
             return  # odometry from before the push
         if t - self.last_print >= 1.0 / self.args.print_rate:
@@ -77,14 +79,16 @@ def main(argv=None):
     rclpy.init(args=argv)
     node = PushAndFollow(args)
     try:
+        # Wait until the physics node hears us and we hear it: its odometry
+        # also says what sim time it is (paused nodes publish none: unpause).
         deadline = time.monotonic() + args.wait
-        while node.command.get_subscription_count() == 0:
+        while node.command.get_subscription_count() == 0 or node.latest_stamp is None:
             if time.monotonic() > deadline:
-                print(f"no physics node is listening on {node.command.topic_name}", file=sys.stderr)
+                print(f"no running physics node on {node.command.topic_name}", file=sys.stderr)
                 return 1
             rclpy.spin_once(node, timeout_sec=0.05)
         node.push(args.impulse or args.force)
-        node.pushed_at = node.get_clock().now().nanoseconds * 1e-9
+        node.pushed_at = node.latest_stamp
         print(f"{'impulse' if args.impulse else 'force'} {args.impulse or args.force} sent on "
               f"{node.command.topic_name} at t={node.pushed_at:.3f} s", flush=True)
         deadline = time.monotonic() + args.wait + args.seconds * 100

@@ -33,6 +33,13 @@ def build_parser():
         help="rebuild the world from the embedded scene, re-apply the recorded commands and compare poses; "
         "exit status 0 match, 1 diverge, 2 error",
     )
+    p.add_argument(
+        "--delay",
+        type=float,
+        default=0.5,
+        metavar="S",
+        help="wall seconds between creating the publishers and the first message, so subscribers can connect",
+    )
     p.add_argument("--recover", metavar="OUT", help="write the readable part of FILE to OUT as a complete MCAP")
     return p
 
@@ -59,7 +66,7 @@ def main(argv=None):
     rclpy.init(args=argv)
     node = rclpy.create_node(REPLAY_NODE)
     try:
-        count = republish(node, recording, args.rate)
+        count = republish(node, recording, args.rate, args.delay)
         print(f"replayed {count} messages from {args.file}", flush=True)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
@@ -74,12 +81,20 @@ def _qos_of(channel):
     return LATCHED if "transient_local" in text else STREAM
 
 
-def republish(node, recording, rate):
+def republish(node, recording, rate, delay=0.5):
     """Publish every recorded message in file order, paced by its log time
     (sim time) divided by `rate`, with /clock at each new sim time. The
     recorded /clock is replaced by this one."""
     clock = node.create_publisher(Clock, "/clock", LATCHED)
-    publishers = {}
+    # Every publisher exists before the first message: a subscriber needs a
+    # moment to discover a new publisher, and volatile messages sent before
+    # that are lost.
+    publishers = {
+        topic: node.create_publisher(message_class(type_name), topic, _qos_of(recording.channels.get(topic)))
+        for topic, type_name in recording.topics().items()
+        if topic != "/clock"
+    }
+    time.sleep(max(delay, 0.0))
     wall_start = sim_start = last = None
     count = 0
     for m in recording.messages():
@@ -97,11 +112,7 @@ def republish(node, recording, rate):
         if t != last:
             clock.publish(Clock(clock=time_msg(t)))
             last = t
-        pub = publishers.get(m.topic)
-        if pub is None:
-            pub = node.create_publisher(message_class(m.type_name), m.topic, _qos_of(recording.channels.get(m.topic)))
-            publishers[m.topic] = pub
-        pub.publish(m.data)
+        publishers[m.topic].publish(m.data)
         count += 1
     return count
 
