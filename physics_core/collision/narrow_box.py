@@ -210,7 +210,7 @@ def clip_faces(ref_c, ref_ax, ref_h, axis, n_ref, inc_c, inc_ax, inc_h, margin):
         good = np.abs(den) > 1e-14
         s = (sides - P[:, :, along][..., None]) / np.where(good, den, 1.0)
         pt = P[:, :, None, :] + s[..., None] * D[:, :, None, :]      # (m, 4, 2, 3)
-        ok = good & (s >= 0.0) & (s <= 1.0) & (np.abs(pt[..., other]) <= lim[..., None] + eps)
+        ok = good & (s >= 0.0) & (s <= 1.0) & (np.abs(pt[..., other]) <= (lim + eps)[..., None])
         cross.append((pt.reshape(m, 8, 3), ok.reshape(m, 8)))
 
     cu = np.concatenate([vu, cu2, cross[0][0][..., 0], cross[1][0][..., 0]], axis=1)
