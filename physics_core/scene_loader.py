@@ -119,7 +119,7 @@ def parse_effects(r: Reader, gravity):
         br = er.sub("buoyancy")
         br.only({"fluid_density", "surface_z", "linear_damping", "angular_damping", "cells"})
         if gravity is None or not np.any(gravity):
-            br.fail("fluid_density", "buoyancy only with a `gravity:` that is not zero (F = ρ g V)",
+            er.fail("buoyancy", "buoyancy only with a `gravity:` that is not zero (F = ρ g V)",
                     "no gravity")
         d = BuoyancyParams()
         effects["buoyancy"] = BuoyancyParams(
