@@ -62,12 +62,32 @@ def odometries(names, pos, quat, vel, omega, stamp_ns, frame_id=WORLD_FRAME):
     ]
 
 
-def _odometry(name, pos, quat, v_body, w_body, stamp_ns, frame_id):
-    msg = Odometry()
+class BodyOdometry:
+    """Builds `odometries` step after step, reusing one message per body."""
+
+    def __init__(self, names, frame_id=WORLD_FRAME):
+        self.names = tuple(names)
+        self.frame_id = frame_id
+        self._msgs = [None] * len(self.names)
+
+    def build(self, pos, quat, vel, omega, stamp_ns):
+        v_body = rotate_to_body(quat, vel).tolist()
+        w_body = rotate_to_body(quat, omega).tolist()
+        rows = zip(self.names, pos.tolist(), quat.tolist(), v_body, w_body)
+        for i, (name, p, q, v, w) in enumerate(rows):
+            self._msgs[i] = _odometry(name, p, q, v, w, stamp_ns, self.frame_id, self._msgs[i])
+        return self._msgs
+
+
+def _odometry(name, pos, quat, v_body, w_body, stamp_ns, frame_id, msg=None):
+    if msg is None:
+        msg = Odometry()
+        msg.header.frame_id = frame_id
+        msg.child_frame_id = name
     msg.header.stamp = time_msg(stamp_ns)
-    msg.header.frame_id = frame_id
-    msg.child_frame_id = name
-    msg.pose.pose = _pose(pos, quat)
+    p, o = msg.pose.pose.position, msg.pose.pose.orientation
+    p.x, p.y, p.z = float(pos[0]), float(pos[1]), float(pos[2])
+    o.w, o.x, o.y, o.z = float(quat[0]), float(quat[1]), float(quat[2]), float(quat[3])
     t = msg.twist.twist
     t.linear.x, t.linear.y, t.linear.z = (float(x) for x in v_body)
     t.angular.x, t.angular.y, t.angular.z = (float(x) for x in w_body)

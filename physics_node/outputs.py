@@ -14,7 +14,7 @@ from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import String
 from visualization_msgs.msg import MarkerArray
 
-from msg_adapters import body_markers, contact_cloud, odometries, pose_array, scene_markers, time_msg
+from msg_adapters import BodyOdometry, SceneMarkers, body_markers, contact_cloud, pose_array, time_msg
 
 from .qos import COMMANDS, LATCHED, STREAM
 from .recorder import EVENTS_SUFFIX, RESET_EVENT
@@ -35,6 +35,10 @@ class Outputs:
         self.odom = [pub(Odometry, f"~/{name}/odom", STREAM) for name in model.names]
         self._qos = {p.topic_name: q for p, q in self._all_publishers()}
         self.events_topic = node.get_fully_qualified_name() + EVENTS_SUFFIX
+        # Messages are published (serialized) before the next step changes
+        # them, so one set per body can be reused.
+        self._odometry = BodyOdometry(model.names)
+        self._markers = SceneMarkers(model)
 
     def _all_publishers(self):
         yield self.clock, LATCHED
@@ -58,11 +62,11 @@ class Outputs:
     def send_state(self, world, time_ns, step):
         s = world.state
         self._send(self.poses, pose_array(s.pos, s.quat, time_ns), time_ns, step)
-        for publisher, msg in zip(self.odom, odometries(self.model.names, s.pos, s.quat, s.vel, s.omega, time_ns)):
+        for publisher, msg in zip(self.odom, self._odometry.build(s.pos, s.quat, s.vel, s.omega, time_ns)):
             self._send(publisher, msg, time_ns, step)
         contacts = world.contacts
         self._send(self.contacts, contact_cloud(contacts, time_ns), time_ns, step)
-        self._send(self.markers, scene_markers(self.model, s.pos, s.quat, contacts, time_ns), time_ns, step)
+        self._send(self.markers, self._markers.build(s.pos, s.quat, contacts, time_ns), time_ns, step)
 
     def send_bodies(self, world, time_ns, step):
         msg = body_markers(self.model, world.state.pos, world.state.quat, time_ns)

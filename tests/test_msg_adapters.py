@@ -305,3 +305,21 @@ def test_schema_lists_each_dependency_once():
 def test_message_class_and_type_name_are_inverse():
     for cls in RECORDED_TYPES:
         assert message_class(type_name(cls)) is cls
+
+
+def test_reusing_builders_give_the_same_bytes_as_fresh_messages():
+    from msg_adapters import BodyOdometry, SceneMarkers, odometries
+
+    rng = np.random.default_rng(3)
+    markers, odom = SceneMarkers(_Model), BodyOdometry(_Model.names)
+    for stamp in (10, 20):
+        pos, vel, omega = rng.normal(size=(3, 3)), rng.normal(size=(3, 3)), rng.normal(size=(3, 3))
+        quat = rng.normal(size=(3, 4))
+        quat /= np.linalg.norm(quat, axis=1, keepdims=True)
+        contacts = _contacts(stamp // 10)
+        assert serialize_message(markers.build(pos, quat, contacts, stamp)) == serialize_message(
+            scene_markers(_Model, pos, quat, contacts, stamp)
+        )
+        fresh = odometries(_Model.names, pos, quat, vel, omega, stamp)
+        reused = odom.build(pos, quat, vel, omega, stamp)
+        assert [serialize_message(m) for m in reused] == [serialize_message(m) for m in fresh]
