@@ -394,3 +394,28 @@ def test_batched_pairs_match_pairs_one_at_a_time():
         np.testing.assert_allclose(batch.point[rows][order], one.point[np.argsort(one.key)], atol=1e-12)
         np.testing.assert_allclose(batch.depth[rows][order], one.depth[np.argsort(one.key)], atol=1e-12)
         np.testing.assert_allclose(batch.normal[rows][order], one.normal[np.argsort(one.key)], atol=1e-12)
+
+
+def test_coincident_boxes_are_finite():
+    q = axis_angle((1, 2, 3), 0.4)
+    _, m = run(box("a", (0.5, 0.3, 0.2), (1, 1, 1), q), box("b", (0.5, 0.3, 0.2), (1, 1, 1), q))
+    assert 1 <= len(m) <= 4
+    np.testing.assert_allclose(m.depth, 0.4, atol=1e-9)     # out through the thinnest axis (2 × 0.2)
+
+
+def test_sphere_centre_on_a_box_corner_is_finite():
+    _, m = run(box("b", HALF, (0, 0, 0)), sphere("s", 0.1, HALF))
+    assert len(m) == 1 and m.depth[0] == pytest.approx(0.1)
+    assert abs(np.linalg.norm(m.normal[0]) - 1.0) < 1e-12
+
+
+def test_crossed_bars_meet_edge_to_edge_at_right_angles():
+    # two long bars, one along x and one along y, each turned 45° about its own
+    # long axis so that their edges cross: a single contact point
+    r = math.sqrt(2) * 0.1
+    _, m = run(box("x_bar", (2.0, 0.1, 0.1), (0, 0, 0), axis_angle((1, 0, 0), math.pi / 4)),
+               box("y_bar", (0.1, 2.0, 0.1), (0, 0, 2 * r - 0.01), axis_angle((0, 1, 0), math.pi / 4)))
+    assert len(m) == 1
+    np.testing.assert_allclose(m.normal[0], [0, 0, 1], atol=1e-9)
+    assert m.depth[0] == pytest.approx(0.01)
+    np.testing.assert_allclose(m.point[0], [0, 0, r - 0.005], atol=1e-9)

@@ -31,6 +31,7 @@ Settings (scene keys under effects.contacts):
 """
 import numpy as np
 
+from .. import quaternion as qt
 from ..shapes import BOX, PLANE, SPHERE
 from .broadphase import aabb_half_extents, bounding_radius, overlapping_pairs, plane_pairs
 from .narrowphase import signed_depth
@@ -135,10 +136,26 @@ def swept_pairs(model, prev_pos, prev_quat, pos, quat, fast, margin: float = 0.0
     return a[order], b[order]
 
 
+def _slab_window(d0, dv, E):
+    """[t_in, t_out] ∩ [0, 1] where |d0 + t dv| <= E on every axis (rows of (k, 3))."""
+    moving = np.abs(dv) > 1e-300
+    safe = np.where(moving, dv, 1.0)
+    t1 = (-E - d0) / safe
+    t2 = (E - d0) / safe
+    inside = np.abs(d0) <= E
+    lo = np.where(moving, np.minimum(t1, t2), np.where(inside, -np.inf, np.inf))
+    hi = np.where(moving, np.maximum(t1, t2), np.where(inside, np.inf, -np.inf))
+    return np.maximum(lo.max(axis=1), 0.0), np.minimum(hi.min(axis=1), 1.0)
+
+
 def _overlap_window(model, prev_pos, prev_quat, pos, quat, a, b):
     """[t_in, t_out] within [0, 1] where the moving bounding boxes of each
     pair overlap (empty: t_in > t_out). Centres move linearly, so on each
-    axis |d0 + t dv| <= e_a + e_b is an interval of t (slab test)."""
+    axis |d0 + t dv| <= e_a + e_b is an interval of t (slab test).
+
+    When `a` is a box that does not turn over the step (a static wall), the
+    test runs in a's own frame with its exact half extents, so a thin wall
+    set at an angle still gives a short window."""
     k = len(a)
     t_in, t_out = np.zeros(k), np.ones(k)
     solid = (model.shape_type[a] != PLANE) & (model.shape_type[b] != PLANE)
@@ -147,17 +164,31 @@ def _overlap_window(model, prev_pos, prev_quat, pos, quat, a, b):
     s = np.flatnonzero(solid)
     sa, sb = a[s], b[s]
     half = swept_half_extents(model, prev_quat, quat)
-    E = half[sa] + half[sb]
     d0 = prev_pos[sb] - prev_pos[sa]
     dv = (pos[sb] - prev_pos[sb]) - (pos[sa] - prev_pos[sa])
-    moving = np.abs(dv) > 1e-300
-    safe = np.where(moving, dv, 1.0)
-    t1 = (-E - d0) / safe
-    t2 = (E - d0) / safe
-    lo = np.where(moving, np.minimum(t1, t2), np.where(np.abs(d0) <= E, -np.inf, np.inf))
-    hi = np.where(moving, np.maximum(t1, t2), np.where(np.abs(d0) <= E, np.inf, -np.inf))
-    t_in[s] = np.maximum(lo.max(axis=1), 0.0)
-    t_out[s] = np.minimum(hi.min(axis=1), 1.0)
+    t_in[s], t_out[s] = _slab_window(d0, dv, half[sa] + half[sb])
+
+    fixed = (model.shape_type[sa] == BOX) & np.all(prev_quat[sa] == quat[sa], axis=1)
+    if fixed.any():
+        f = np.flatnonzero(fixed)
+        fa, fb = sa[f], sb[f]
+        Ra = qt.to_matrix(quat[fa])
+        local = lambda v: np.einsum("kji,kj->ki", Ra, v)          # Rᵀ v: world → a's frame
+        # b's extent along a's axes: |Ra^T Rb| h_b at either end, grown for its turn
+        eb = np.repeat(model.radius[fb, None], 3, axis=1)
+        box_b = model.shape_type[fb] == BOX
+        if box_b.any():
+            g = np.flatnonzero(box_b)
+            hb = model.half_extents[fb[g]]
+            ends = [np.einsum("kij,kj->ki", np.abs(np.einsum("kji,kjl->kil", Ra[g], qt.to_matrix(q[fb[g]]))), hb)
+                    for q in (prev_quat, quat)]
+            R = bounding_radius(model)[fb[g], None]
+            turn = np.minimum(ends[0] + R * rotation_angle(prev_quat[fb[g]], quat[fb[g]])[:, None], R)
+            eb[g] = np.maximum(np.maximum(ends[0], ends[1]), turn)
+        lo, hi = _slab_window(local(d0[f]), local(dv[f]), model.half_extents[fa] + eb)
+        # both windows hold every overlap: keep their intersection
+        t_in[s[f]] = np.maximum(t_in[s[f]], lo)
+        t_out[s[f]] = np.minimum(t_out[s[f]], hi)
     return t_in, t_out
 
 
