@@ -89,6 +89,7 @@ class LongRunResult:
     last_tenth: float
     final_rel_energy_error: float
     seconds: float
+    trace: tuple = ()          # |ΔE/E| every LONG_SAMPLE steps
 
     @property
     def limit(self):
@@ -117,7 +118,7 @@ def long_run(integrator="semi_implicit_euler", steps=100_000):
     tenth = max(1, len(dev) // 10)
     return LongRunResult(integrator, steps, float(dev.max()), float(dev[:tenth].max()),
                          float(dev[-tenth:].max()), float(world.energy() / e0 - 1.0),
-                         perf_counter() - t0)
+                         perf_counter() - t0, tuple(dev.tolist()))
 
 
 # ---- random scenes -------------------------------------------------------------
