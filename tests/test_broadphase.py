@@ -165,3 +165,17 @@ def test_detect_is_deterministic():
         assert np.array_equal(getattr(m1, f), getattr(m2, f))
     assert np.all(np.diff(m1.key) > 0)
     assert np.all(np.isfinite(m1.point)) and np.all(np.isfinite(m1.normal))
+
+
+def test_thousands_of_boxes_match_brute_force():
+    """More bodies than one grid block, mixed sizes, with a few large ones."""
+    rng = np.random.default_rng(11)
+    n = 2500
+    centre = rng.uniform(-4, 4, (n, 3))
+    half = rng.uniform(0.02, 0.15, (n, 3))
+    half[:10] *= 30.0
+    lo, hi = centre - half, centre + half
+    i, j = overlapping_pairs(lo, hi)
+    hit = np.all((lo[:, None, :] <= hi[None, :, :]) & (lo[None, :, :] <= hi[:, None, :]), axis=2)
+    bi, bj = np.nonzero(np.triu(hit, k=1))
+    assert sorted(zip(i.tolist(), j.tolist())) == sorted(zip(bi.tolist(), bj.tolist()))

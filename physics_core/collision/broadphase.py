@@ -27,6 +27,7 @@ from ..shapes import BOX, PLANE, SPHERE
 
 SMALL_FACTOR = 4.0     # a body more than this × the median AABB extent is "large"
 MAX_CELLS = 2 ** 20    # grid cells per axis; a wider scene gets a coarser grid
+GRID_BLOCK = 1024      # bodies whose candidate pairs are expanded and tested together
 DENSE_CELLS_PER_BODY = 64   # up to this many grid cells per body, index cells by a dense table
 
 # Own cell and the 13 neighbours that come after it in (x, y, z) order.
@@ -145,16 +146,25 @@ def _grid_pairs(small, cols, cell):
             end[:, k] = np.searchsorted(key, nkey[:, k], side="right")
     start[:, 0] = np.arange(len(key)) + 1        # own cell: only the later entries
     count = end - start
-    flat = count.ravel()
-    total = int(flat.sum())
-    if total == 0:
-        return empty
-    q = np.repeat(start.ravel() - (np.cumsum(flat) - flat), flat)
-    q += np.arange(total)
-    p = np.repeat(np.repeat(np.arange(len(key)), _FORWARD.shape[0]), flat)
     # candidates index the cell-sorted copy, which keeps neighbours close in memory
-    p, q = _filter(cols.take(body, axis=1), p, q)
-    return body.take(p), body.take(q)
+    sorted_cols = cols.take(body, axis=1)
+    ps, qs = [], []
+    # blocks of bodies keep the candidate arrays small (cache-sized, reused
+    # allocations); the loop runs over blocks, not over bodies or pairs
+    for r0 in range(0, len(key), GRID_BLOCK):
+        flat = count[r0:r0 + GRID_BLOCK].ravel()
+        total = int(flat.sum())
+        if total == 0:
+            continue
+        q = np.repeat(start[r0:r0 + GRID_BLOCK].ravel() - (np.cumsum(flat) - flat), flat)
+        q += np.arange(total)
+        p = np.repeat(np.arange(r0, r0 + len(flat) // _FORWARD.shape[0]).repeat(_FORWARD.shape[0]), flat)
+        p, q = _filter(sorted_cols, p, q)
+        ps.append(p)
+        qs.append(q)
+    if not ps:
+        return empty
+    return body.take(np.concatenate(ps)), body.take(np.concatenate(qs))
 
 
 def _large_pairs(big, small, cols, cell):
