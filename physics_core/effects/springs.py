@@ -74,26 +74,39 @@ class _End:
 
     def __init__(self, model, body, local):
         self.on_body = body >= 0
+        self.all_bodies = bool(self.on_body.all())      # common cases skip the masking
+        self.no_body = not self.on_body.any()
         self.row = np.where(self.on_body, body, 0)
         self.mask = self.on_body[:, None].astype(float)
         self.local = np.where(self.on_body[:, None], local, 0.0)
         self.fixed = np.where(self.on_body[:, None], 0.0, local)
+        self.still = np.zeros_like(self.fixed)
         self.turns = bool(np.any(self.local))
         self.bodies = self.row[self.on_body]
 
     def points(self, kin):
         """World attachment points, offsets from the centres (m) and point velocities (m/s)."""
+        if self.no_body:
+            return self.fixed, None, self.still
         i = self.row
+        point = kin.pos[i]
+        vel = kin.vel[i]
+        arm = None
         if self.turns:
-            arm = qt.rotate(kin.quat[i], self.local) * self.mask
-            vel = (kin.vel[i] + cross(kin.omega[i], arm)) * self.mask
-        else:
-            arm = None
-            vel = kin.vel[i] * self.mask
-        point = kin.pos[i] * self.mask + self.fixed
-        if arm is not None:
-            point += arm
-        return point, arm, vel
+            arm = qt.rotate(kin.quat[i], self.local)
+            vel = vel + cross(kin.omega[i], arm)
+        if not self.all_bodies:
+            point = point * self.mask + self.fixed
+            vel = vel * self.mask
+            if arm is not None:
+                arm = arm * self.mask
+        return (point + arm if arm is not None else point), arm, vel
+
+    def accumulate(self, out, value):
+        """out[body] += value for the ends on bodies (several springs may share a body)."""
+        if self.no_body:
+            return
+        np.add.at(out, self.bodies, value if self.all_bodies else value[self.on_body])
 
 
 def _ends(model):
@@ -104,12 +117,6 @@ def _ends(model):
 def makes_torque(model) -> bool:
     """Whether some spring is attached away from a body's centre of mass (τ = r × F)."""
     return any(end.turns for end in _ends(model)) if len(model.springs) else False
-
-
-def _accumulate(out, end, value):
-    """out[body] += value for the spring ends on bodies (several springs may share a body)."""
-    sel = end.on_body
-    np.add.at(out, end.bodies, value[sel] if not sel.all() else value)
 
 
 def make(model):
@@ -128,12 +135,12 @@ def make(model):
         if damped:
             tension = tension + c * dot(vb - va, u)
         f = tension[:, None] * u
-        _accumulate(force, end_a, f)
-        _accumulate(force, end_b, -f)
+        end_a.accumulate(force, f)
+        end_b.accumulate(force, -f)
         if ra is not None:
-            _accumulate(torque, end_a, cross(ra, f))
+            end_a.accumulate(torque, cross(ra, f))
         if rb is not None:
-            _accumulate(torque, end_b, cross(rb, -f))
+            end_b.accumulate(torque, cross(rb, -f))
     return apply
 
 
