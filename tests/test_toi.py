@@ -235,3 +235,20 @@ def test_many_pairs_bisect_together():
     assert hit.all()
     expect = (heights[b - 1] - 0.1) / (heights[b - 1] + 1.0)
     assert np.all((expect - t >= 0) & (expect - t < CCD_TOLERANCE))
+
+
+def test_corner_dipping_into_the_floor_and_out_again_is_caught():
+    """A bar turning a half turn about y in one step, above the floor at both
+    ends: its end sweeps down through the floor and back up mid-step."""
+    zc = 0.6
+    model = model_of(ground(), brick("bar", (1.0, 0.05, 0.05), (0, 0, zc)))
+    prev_pos, prev_quat, pos, quat = ends(model)
+    quat[1] = [math.cos(math.pi / 2 * 0.98), 0.0, math.sin(math.pi / 2 * 0.98), 0.0]   # 176.4°
+    assert depth_at(model, prev_pos, prev_quat, pos, quat, 0, 1, 1.0) <= 0
+    fast = fast_body_mask(model, prev_pos, pos, prev_quat=prev_quat, quat=quat)
+    a, b = swept_pairs(model, prev_pos, prev_quat, pos, quat, fast)
+    assert list(zip(a, b)) == [(0, 1)]
+    t, hit = time_of_impact(model, prev_pos, prev_quat, pos, quat, a, b, tolerance=1e-7, iterations=60)
+    assert hit[0]
+    phi = math.asin(zc / math.hypot(1.0, 0.05)) - math.atan2(0.05, 1.0)
+    assert t[0] == pytest.approx(phi / (math.pi * 0.98), abs=1e-6)

@@ -33,7 +33,7 @@ import numpy as np
 
 from .. import quaternion as qt
 from ..shapes import BOX, PLANE, SPHERE
-from .broadphase import aabb_half_extents, bounding_radius, overlapping_pairs, plane_pairs
+from .broadphase import aabb_half_extents, bounding_radius, overlapping_pairs, support_along
 from .narrowphase import signed_depth
 
 CCD_THRESHOLD = 0.5
@@ -112,8 +112,8 @@ def swept_half_extents(model, prev_quat, quat) -> np.ndarray:
 def swept_pairs(model, prev_pos, prev_quat, pos, quat, fast, margin: float = 0.0):
     """Pairs (a, b) with at least one fast body whose swept boxes meet, in
     the Manifold order (static or lower index first), sorted; plus each fast
-    body with each plane its lowest point is less than `margin` above at the
-    end of the step."""
+    body with each plane its lowest point may come within `margin` of
+    during the step."""
     fast = np.asarray(fast, dtype=bool)
     if not fast.any():
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
@@ -129,11 +129,32 @@ def swept_pairs(model, prev_pos, prev_quat, pos, quat, fast, margin: float = 0.0
     flip = static[j] & ~static[i]
     a = np.where(flip, j, i)
     b = np.where(flip, i, j)
-    pa, pb = plane_pairs(model, pos, quat, margin, bodies=np.flatnonzero(fast))
+    pa, pb = _swept_plane_pairs(model, prev_pos, prev_quat, pos, quat, np.flatnonzero(fast), margin)
     a = np.concatenate([a, pa])
     b = np.concatenate([b, pb])
     order = np.argsort(np.minimum(a, b) * model.n + np.maximum(a, b), kind="stable")
     return a[order], b[order]
+
+
+def _swept_plane_pairs(model, prev_pos, prev_quat, pos, quat, bodies, margin):
+    """(plane, body) pairs where the body's lowest point may come within
+    `margin` of the plane during the step: the centre's height is lowest at
+    an end of the step (linear motion), and the reach below the centre is
+    at most the larger end value grown by R θ for the turn (and at most R)."""
+    planes = np.flatnonzero(model.shape_type == PLANE)
+    if len(planes) == 0 or len(bodies) == 0:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    n = model.plane_normal[planes]
+    off = model.plane_offset[planes]
+    height = np.minimum(prev_pos[bodies] @ n.T, pos[bodies] @ n.T) - off          # (B, P)
+    r0 = support_along(model, prev_quat, bodies, n)
+    r1 = support_along(model, quat, bodies, n)
+    R = bounding_radius(model)[bodies, None]
+    turn = np.minimum(r0 + R * rotation_angle(prev_quat[bodies], quat[bodies])[:, None], R)
+    reach = np.maximum(np.maximum(r0, r1), turn)
+    b, p = np.nonzero(height - reach < margin)
+    order = np.lexsort((bodies[b], planes[p]))
+    return planes[p][order], bodies[b][order]
 
 
 def _slab_window(d0, dv, E):
@@ -229,15 +250,19 @@ def time_of_impact(model, prev_pos, prev_quat, pos, quat, pairs_a, pairs_b,
     # sample count: relative travel inside the window over the allowed spacing
     la, lb = a[live], b[live]
     sweep = sweep_length(model, prev_pos, prev_quat, pos, quat)
+    travel_a = np.linalg.norm(pos[la] - prev_pos[la], axis=1)
+    travel_b = np.linalg.norm(pos[lb] - prev_pos[lb], axis=1)
     rel = np.linalg.norm((pos[lb] - prev_pos[lb]) - (pos[la] - prev_pos[la]), axis=1)
-    rot = sweep[la] - np.linalg.norm(pos[la] - prev_pos[la], axis=1) \
-        + sweep[lb] - np.linalg.norm(pos[lb] - prev_pos[lb], axis=1)
-    span = t_out[live] - t_in[live]
+    rot = (sweep[la] - travel_a) + (sweep[lb] - travel_b)
     thick = smallest_half_size(model)
-    spacing = SAMPLE_SPACING * (thick[la] + thick[lb])
-    with np.errstate(invalid="ignore"):
-        need = np.where(np.isfinite(spacing), np.ceil(span * (rel + rot) / spacing), 1.0)
-    intervals = np.clip(np.nan_to_num(need, nan=1.0), 1, max_samples).astype(np.int64)
+    # a plane is a half-space: moving through it leaves the body inside, so
+    # only turning (a corner dipping in and out) needs samples, spaced by the body
+    plane = model.shape_type[la] == PLANE
+    rel = np.where(plane, 0.0, rel)
+    spacing = SAMPLE_SPACING * np.where(plane, thick[lb], thick[la] + thick[lb])
+    span = t_out[live] - t_in[live]
+    need = np.ceil(span * (rel + rot) / spacing)
+    intervals = np.clip(need, 1, max_samples).astype(np.int64)
 
     # every pair's samples t_in + span j / intervals, j = 0..intervals, flattened
     count = intervals + 1
