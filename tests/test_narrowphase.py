@@ -419,3 +419,24 @@ def test_crossed_bars_meet_edge_to_edge_at_right_angles():
     np.testing.assert_allclose(m.normal[0], [0, 0, 1], atol=1e-9)
     assert m.depth[0] == pytest.approx(0.01)
     np.testing.assert_allclose(m.point[0], [0, 0, r - 0.005], atol=1e-9)
+
+
+def _keys_after_jiggle(bodies, seed, steps=20, scale=1e-5):
+    """The set of keys of each detect() while every dynamic body shifts and turns
+    slightly, as a resting stack does from step to step."""
+    model = build_model({"dt": 0.01, "bodies": bodies})
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(steps):
+        pos = np.array(model.initial["pos"]) + rng.normal(0, scale, (model.n, 3)) * ~model.is_static[:, None]
+        turn = qt.from_rotation_vector(rng.normal(0, scale, (model.n, 3)) * ~model.is_static[:, None])
+        quat = qt.normalize(qt.multiply(turn, np.array(model.initial["quat"])))
+        out.append(tuple(detect(model, pos, quat, 0.01).key.tolist()))
+    return out
+
+
+def test_keys_stay_put_for_a_resting_stack():
+    keys = _keys_after_jiggle([plane(), box("low", (0.5, 0.5, 0.5), (0, 0, 0.499)),
+                               box("up", (0.5, 0.5, 0.5), (0.01, 0, 1.498)),
+                               box("top", (0.2, 0.3, 0.2), (0, 0, 2.197), axis_angle((0, 0, 1), 0.5))], 5)
+    assert len(set(keys)) == 1 and len(keys[0]) == 12
