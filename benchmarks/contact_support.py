@@ -10,9 +10,10 @@ import functools
 from physics_core import PhysicsError, SceneError, load_scene
 
 PROBE = {"dt": 1.0 / 240.0, "gravity": "earth", "effects": {"contacts": {}},
-         "bodies": [{"name": "ground", "shape": {"type": "plane"}, "static": True},
+         "bodies": [{"name": "ground", "shape": {"type": "plane"}, "static": True,
+                     "material": "concrete"},
                     {"name": "ball", "shape": {"type": "sphere", "radius": 0.1}, "mass": 1.0,
-                     "position": [0.0, 0.0, 0.11]}]}
+                     "material": "rubber", "position": [0.0, 0.0, 0.11]}]}
 
 
 @functools.lru_cache(maxsize=1)

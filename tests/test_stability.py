@@ -93,7 +93,7 @@ def test_hard_case_stays_bounded(case):
     ok, why = contacts_available()
     if not ok:
         pytest.skip(f"contacts not available: {why}")
-    r = hard_cases.run(case, quick=True)
+    r = hard_cases.run(case, duration=hard_cases.TEST_DURATION)
     assert r.finite, f"{case.name}: non-finite state"
     failures = r.failures()
     assert not failures, f"{case.name}: " + "; ".join(failures)

@@ -1,0 +1,64 @@
+"""Steps/s and peak memory of one engine on one scene, each in a fresh process.
+
+A fresh process per measurement keeps one engine's caches and allocations
+out of another's numbers, and lets the peak resident memory (ru_maxrss) be
+read for that run alone. Run as
+`python -m benchmarks.measure SCENE_MODULE SCENE_FUNCTION N ENGINE STEPS`;
+prints one JSON line.
+"""
+import importlib
+import json
+import os
+import resource
+import subprocess
+import sys
+from time import perf_counter
+
+WARMUP = 5          # steps before timing: first contacts, caches, lazy set-up
+
+
+def _rss_mb():
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2 ** 20
+
+
+def measure_here(scene_module, scene_function, n, engine, steps):
+    from . import engines
+    bodies = getattr(importlib.import_module(scene_module), scene_function)(n)
+    # the engine's own module is imported before the baseline, so it does not count as scene memory
+    importlib.import_module(engine)
+    base = _rss_mb()
+    t0 = perf_counter()
+    step, positions = engines.build(engine, bodies)
+    build = perf_counter() - t0
+    step(WARMUP)
+    t0 = perf_counter()
+    step(steps)
+    elapsed = perf_counter() - t0
+    pos = positions()
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    return {"engine": engine, "bodies": len(bodies), "steps": steps, "seconds": elapsed,
+            "steps_per_second": steps / elapsed, "body_steps_per_second": len(bodies) * steps / elapsed,
+            "build_seconds": build, "peak_rss_mb": peak, "baseline_rss_mb": base,
+            "scene_mb": max(0.0, peak - base), "min_z": float(pos[:, 2].min()) if len(pos) else 0.0}
+
+
+def measure(scene_module, scene_function, n, engine, steps, timeout=1800):
+    """Run one measurement in a child process; returns its dict or {"error": ...}."""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    env = dict(os.environ, PYTHONPATH=root + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    cmd = [sys.executable, "-m", "benchmarks.measure", scene_module, scene_function, str(n), engine,
+           str(steps)]
+    try:
+        out = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env)
+    except subprocess.TimeoutExpired:
+        return {"engine": engine, "error": f"timed out after {timeout} s"}
+    if out.returncode != 0:
+        last = (out.stderr.strip().splitlines() or ["no output"])[-1]
+        return {"engine": engine, "error": last[:300]}
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+if __name__ == "__main__":
+    mod, fn, n, engine, steps = sys.argv[1:6]
+    print(json.dumps(measure_here(mod, fn, int(n), engine, int(steps))))
