@@ -23,6 +23,16 @@ from . import quaternion as qt
 
 _SEQUENCE = ((0, 0.5), (1, 0.5), (2, 1.0), (1, 0.5), (0, 0.5))
 
+# q ⊗ e_i for the unit pure quaternion along body axis i is a signed permutation of q:
+# q ⊗ (c, s e_i) = c q + s (q ⊗ e_i).
+_Q_PERM = tuple(np.array(p) for p in ((1, 0, 3, 2), (2, 3, 0, 1), (3, 2, 1, 0)))
+_Q_SIGN = (np.array([-1.0, 1.0, 1.0, -1.0]), np.array([-1.0, -1.0, 1.0, 1.0]),
+           np.array([-1.0, 1.0, -1.0, 1.0]))
+# L × e_i, also a signed permutation: (L × e_i)_j = L_k, (L × e_i)_k = −L_j, with (i, j, k) cyclic.
+_L_PERM = tuple(np.array(p) for p in ((0, 2, 1), (2, 1, 0), (1, 0, 2)))
+_L_SIGN = (np.array([0.0, 1.0, -1.0]), np.array([-1.0, 0.0, 1.0]), np.array([1.0, -1.0, 0.0]))
+_L_OFF_AXIS = (np.array([0.0, 1.0, 1.0]), np.array([1.0, 0.0, 1.0]), np.array([1.0, 1.0, 0.0]))
+
 
 def isotropic_rows(inertia: np.ndarray) -> np.ndarray:
     """Bodies whose three principal moments are equal (to 1e-12 relative)."""
@@ -37,20 +47,15 @@ def advance(q, L, inv_inertia, h, isotropic):
     isotropic: (n,) bool, rows advanced by the exact map."""
     Lb = qt.rotate_inverse(q, L)                          # body-frame L
     out = q
-    axis_quat = np.zeros(q.shape)
     for axis, frac in _SEQUENCE:
-        half = 0.5 * frac * h * Lb[:, axis] * inv_inertia[:, axis]
-        c, s = np.cos(half), np.sin(half)
-        axis_quat[:, 0] = c
-        axis_quat[:, 1:] = 0.0
-        axis_quat[:, 1 + axis] = s
-        out = qt.multiply(out, axis_quat)                 # turn about the body's own axis
-        # the body turned by θ = 2·half, so L seen from the body turns by −θ
-        j, k = (axis + 1) % 3, (axis + 2) % 3
-        c2, s2 = np.cos(2.0 * half), np.sin(2.0 * half)
-        Lj, Lk = Lb[:, j].copy(), Lb[:, k]
-        Lb[:, j] = c2 * Lj + s2 * Lk
-        Lb[:, k] = c2 * Lk - s2 * Lj
+        half = (0.5 * frac * h) * Lb[:, axis] * inv_inertia[:, axis]
+        c, s = np.cos(half)[:, None], np.sin(half)[:, None]
+        # turn the body about its own axis by θ = 2·half ...
+        out = c * out + s * (out.take(_Q_PERM[axis], axis=1) * _Q_SIGN[axis])
+        # ... so L seen from the body turns by −θ about that axis
+        c2, s2 = 1.0 - 2.0 * s * s, 2.0 * s * c
+        L_cross_e = Lb.take(_L_PERM[axis], axis=1) * _L_SIGN[axis]
+        Lb = Lb + (c2 - 1.0) * (Lb * _L_OFF_AXIS[axis]) + s2 * L_cross_e
     out = qt.normalize(out)
     omega = qt.rotate(out, inv_inertia * Lb)
     if isotropic.any():
