@@ -34,11 +34,11 @@ def build_parser():
         "exit status 0 match, 1 diverge, 2 error",
     )
     p.add_argument(
-        "--delay",
+        "--wait",
         type=float,
-        default=0.5,
+        default=2.0,
         metavar="S",
-        help="wall seconds between creating the publishers and the first message, so subscribers can connect",
+        help="wall seconds to wait for a subscriber to connect before playing (starts as soon as one has)",
     )
     p.add_argument("--recover", metavar="OUT", help="write the readable part of FILE to OUT as a complete MCAP")
     return p
@@ -66,7 +66,7 @@ def main(argv=None):
     rclpy.init(args=argv)
     node = rclpy.create_node(REPLAY_NODE)
     try:
-        count = republish(node, recording, args.rate, args.delay)
+        count = republish(node, recording, args.rate, args.wait)
         print(f"replayed {count} messages from {args.file}", flush=True)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
@@ -81,20 +81,36 @@ def _qos_of(channel):
     return LATCHED if "transient_local" in text else STREAM
 
 
-def republish(node, recording, rate, delay=0.5):
+def _wait_for_listeners(publishers, timeout, settle=0.5):
+    """Wait until some publisher has a subscriber and no further publisher has
+    matched for `settle` seconds (one listening process matches its
+    subscriptions one by one), or until `timeout`."""
+    end = time.monotonic() + max(timeout, 0.0)
+    matched, last_change = 0, None
+    while time.monotonic() < end:
+        now_matched = sum(p.get_subscription_count() > 0 for p in publishers)
+        if now_matched > matched:
+            matched, last_change = now_matched, time.monotonic()
+        elif matched and time.monotonic() - last_change >= settle:
+            return True
+        time.sleep(0.02)
+    return matched > 0
+
+
+def republish(node, recording, rate, wait=2.0):
     """Publish every recorded message in file order, paced by its log time
     (sim time) divided by `rate`, with /clock at each new sim time. The
     recorded /clock is replaced by this one."""
     clock = node.create_publisher(Clock, "/clock", LATCHED)
-    # Every publisher exists before the first message: a subscriber needs a
-    # moment to discover a new publisher, and volatile messages sent before
-    # that are lost.
+    # Every publisher exists before the first message, and play starts once
+    # someone listens: discovering a new process can take seconds, and
+    # volatile messages sent before that are lost.
     publishers = {
         topic: node.create_publisher(message_class(type_name), topic, _qos_of(recording.channels.get(topic)))
         for topic, type_name in recording.topics().items()
         if topic != "/clock"
     }
-    time.sleep(max(delay, 0.0))
+    _wait_for_listeners([clock, *publishers.values()], wait)
     wall_start = sim_start = last = None
     count = 0
     for m in recording.messages():

@@ -244,9 +244,12 @@ def test_replay_republishes_with_clock(session):
     with Driver() as driver:
         poses = driver.listen(PoseArray, "/physics/poses")
         clocks = driver.listen(Clock, "/clock")
-        replay = NodeProcess([path, "--rate", "2"], Path(path).parent, module="physics_node.replay")
+        replay = NodeProcess([path, "--rate", "2", "--wait", "15"], Path(path).parent, module="physics_node.replay")
         try:
-            assert replay.wait(30.0) == 0, replay.log()
+            # Keep receiving while it plays: a subscriber's unread messages
+            # can go when their publisher's process exits.
+            driver.spin_until(lambda: not replay.alive(), 30.0, "the replay to finish")
+            assert replay.wait() == 0, replay.log()
             driver.spin_for(0.3)
         finally:
             replay.stop()
