@@ -30,7 +30,6 @@ def make(model):
     grid = np.stack(np.meshgrid(ticks, ticks, ticks, indexing="ij"), axis=-1).reshape(-1, 3)
     h = model.half_extents[boxes]
     cell_offsets = grid[None, :, :] * h[:, None, :]             # (B, k³, 3) body frame
-    cell_half = h / k                                            # (B, 3)
     cell_volume = model.volume[boxes] / k ** 3
     box_volume = model.volume[boxes]
     up_force = -p.fluid_density * g                              # per unit submerged volume
@@ -45,21 +44,30 @@ def make(model):
                 force[spheres] -= p.linear_damping * frac * kin.vel[spheres]
                 torque[spheres] -= p.angular_damping * frac * kin.omega[spheres]
         if len(boxes):
-            q = kin.quat[boxes]
-            R = qt.to_matrix(q)                                    # (B, 3, 3)
-            arm = np.einsum("bij,bcj->bci", R, cell_offsets)       # (B, k³, 3) world offsets
-            e = np.einsum("bj,bj->b", np.abs(R[:, 2, :]), cell_half)
-            bottom = kin.pos[boxes, 2][:, None] + arm[:, :, 2] - e[:, None]
-            frac = np.clip((p.surface_z - bottom) / (2.0 * e[:, None]), 0.0, 1.0)   # (B, k³)
-            # centroid of the submerged slice sits f·e above the cell's bottom
-            arm = arm.copy()
-            arm[:, :, 2] += (frac - 1.0) * e[:, None]
-            vol = frac * cell_volume[:, None]
-            cell_force = vol[:, :, None] * up_force                # (B, k³, 3)
-            force[boxes] += cell_force.sum(axis=1)
-            torque[boxes] += cross(arm, cell_force).sum(axis=1)
+            R = qt.to_matrix(kin.quat[boxes])                      # (B, 3, 3)
+            reach = np.einsum("bj,bj->b", np.abs(R[:, 2, :]), h)   # half the box's vertical extent
+            z = kin.pos[boxes, 2]
+            # Only boxes cut by the surface need the cells: one fully under water
+            # feels ρ g V at its centre (no torque), one fully out feels nothing.
+            under = z + reach <= p.surface_z
+            cut = np.flatnonzero(~under & (z - reach < p.surface_z))
+            submerged = np.where(under, box_volume, 0.0)
+            if under.any():
+                force[boxes[under]] += box_volume[under, None] * up_force
+            if len(cut):
+                arm = np.einsum("bij,bcj->bci", R[cut], cell_offsets[cut])   # (C, k³, 3) world offsets
+                e = (reach[cut] / k)[:, None]                  # half the vertical extent of a cell
+                bottom = z[cut, None] + arm[:, :, 2] - e
+                frac = np.clip((p.surface_z - bottom) / (2.0 * e), 0.0, 1.0)   # (C, k³)
+                # centroid of the submerged slice sits f·e above the cell's bottom
+                arm[:, :, 2] += (frac - 1.0) * e
+                vol = frac * cell_volume[cut, None]
+                cell_force = vol[:, :, None] * up_force            # (C, k³, 3)
+                force[boxes[cut]] += cell_force.sum(axis=1)
+                torque[boxes[cut]] += cross(arm, cell_force).sum(axis=1)
+                submerged[cut] = vol.sum(axis=1)
             if p.linear_damping or p.angular_damping:
-                f = (vol.sum(axis=1) / box_volume)[:, None]
+                f = (submerged / box_volume)[:, None]
                 force[boxes] -= p.linear_damping * f * kin.vel[boxes]
                 torque[boxes] -= p.angular_damping * f * kin.omega[boxes]
     return apply
