@@ -16,6 +16,7 @@ import numpy as np
 from .. import quaternion as qt
 
 EDGE_EPS = 1e-5        # |A_i × B_j| below this: the edges are parallel, the axis is skipped
+BOX_BLOCK = 2048        # box pairs handled together
 AXIS_TOL = 1e-3        # prefer A's face, then B's face, then an edge, unless the next beats
                        # it by AXIS_TOL × the smallest half extent (keeps the choice steady)
 
@@ -26,27 +27,44 @@ def _frames(ha, pa, qa, hb, pb, qb):
     return A, B, pb - pa
 
 
+_NEXT = np.array([1, 2, 0])
+_PREV = np.array([2, 0, 1])
+
+
 def separations(ha, A, hb, B, t):
     """Separation of the two boxes along each of the 15 axes.
 
     Returns face_a (k, 3), face_b (k, 3), edge (k, 3, 3) (-inf where the
-    edges are parallel) and the unit edge axes (k, 3, 3, 3). Along a unit
-    axis L the separation is |t·L| - Σ h_a |A_m·L| - Σ h_b |B_m·L|."""
-    C = np.einsum("kim,kjm->kij", A, B)                   # C_ij = A_i · B_j
+    edges are parallel) and C (k, 3, 3), C_ij = A_i·B_j. Along a unit axis L
+    the separation is |t·L| - Σ h_a |A_m·L| - Σ h_b |B_m·L|. For the edge
+    axis L = A_i × B_j the terms come from C alone (Ericson 4.4.1): in a's
+    frame L = (0, -C_{i+2,j}, C_{i+1,j}) (indices cyclic, from position i),
+    so |L|² = C_{i+1,j}² + C_{i+2,j}², which stays exact for nearly
+    parallel edges where 1 - C_ij² would cancel."""
+    C = np.einsum("kim,kjm->kij", A, B)
     absC = np.abs(C)
     tA = np.einsum("kim,km->ki", A, t)
     tB = np.einsum("kjm,km->kj", B, t)
     face_a = np.abs(tA) - ha - np.einsum("kij,kj->ki", absC, hb)
     face_b = np.abs(tB) - hb - np.einsum("kij,ki->kj", absC, ha)
-    L = np.cross(A[:, :, None, :], B[:, None, :, :])      # (k, 3, 3, 3): A_i × B_j
-    length = np.sqrt(np.einsum("kijm,kijm->kij", L, L))
+    n1, n2 = _NEXT, _PREV                                  # i+1, i+2 (mod 3)
+    C1, C2 = C[:, n1, :], C[:, n2, :]                      # C_{i+1,j}, C_{i+2,j}
+    aC1, aC2 = absC[:, n1, :], absC[:, n2, :]
+    ra = ha[:, n1, None] * aC2 + ha[:, n2, None] * aC1
+    rb = hb[:, None, n1] * absC[:, :, n2] + hb[:, None, n2] * absC[:, :, n1]
+    dist = np.abs(tA[:, n2, None] * C1 - tA[:, n1, None] * C2)
+    length = np.sqrt(C1 * C1 + C2 * C2)
     valid = length > EDGE_EPS
-    L = L / np.where(valid, length, 1.0)[..., None]
-    ra = np.einsum("kijn,kn->kij", np.abs(np.einsum("kijm,knm->kijn", L, A)), ha)
-    rb = np.einsum("kijn,kn->kij", np.abs(np.einsum("kijm,knm->kijn", L, B)), hb)
-    edge = np.abs(np.einsum("kijm,km->kij", L, t)) - ra - rb
-    edge = np.where(valid, edge, -np.inf)
-    return face_a, face_b, edge, L
+    edge = np.where(valid, (dist - ra - rb) / np.where(valid, length, 1.0), -np.inf)
+    return face_a, face_b, edge, C
+
+
+def edge_axis(A, C, i, j):
+    """Unit world axis A_i × B_j for rows k (arrays i, j), from C (see separations)."""
+    k = np.arange(len(i))
+    c1, c2 = C[k, _NEXT[i], j], C[k, _PREV[i], j]
+    L = -c2[:, None] * A[k, _NEXT[i]] + c1[:, None] * A[k, _PREV[i]]
+    return L / np.linalg.norm(L, axis=1, keepdims=True)
 
 
 def box_box_separation(ha, pa, qa, hb, pb, qb) -> np.ndarray:
@@ -72,10 +90,24 @@ def box_box(model, f, s, pf, qf, ps, qs, margin=0.0):
 
     Slots: face contacts use the quadrant of the contact point in the
     smaller face's frame (0–3 when the reference face is on `first`, 4–7 when
-    on `second`); an edge–edge contact uses slot 0."""
+    on `second`); an edge–edge contact uses slot 0. Pairs go through in
+    blocks of BOX_BLOCK, which keeps the many (pairs × 24 candidates) work
+    arrays small enough to be reused from the allocator's cache."""
+    if len(f) <= BOX_BLOCK:
+        return _box_box(model, f, s, pf, qf, ps, qs, margin)
+    parts = []
+    for c in range(0, len(f), BOX_BLOCK):
+        blk = slice(c, c + BOX_BLOCK)
+        row, slot, point, normal, depth = _box_box(model, f[blk], s[blk], pf[blk], qf[blk],
+                                                   ps[blk], qs[blk], margin)
+        parts.append((row + c, slot, point, normal, depth))
+    return tuple(np.concatenate(col) for col in zip(*parts))
+
+
+def _box_box(model, f, s, pf, qf, ps, qs, margin):
     ha, hb = model.half_extents[f], model.half_extents[s]
     A, B, t = _frames(ha, pf, qf, hb, ps, qs)
-    fa, fb, edge, L = separations(ha, A, hb, B, t)
+    fa, fb, edge, C = separations(ha, A, hb, B, t)
     k = len(t)
     rows = np.arange(k)
     ia, ib = np.argmax(fa, axis=1), np.argmax(fb, axis=1)
@@ -109,7 +141,7 @@ def box_box(model, f, s, pf, qf, ps, qs, margin=0.0):
 
     E = np.flatnonzero(touching & use_edge)
     if len(E):
-        parts.append(_edge_contacts(E, ie[E] // 3, ie[E] % 3, L, se[E], A, ha, pf, B, hb, ps, t))
+        parts.append(_edge_contacts(E, ie[E] // 3, ie[E] % 3, C, se[E], A, ha, pf, B, hb, ps, t))
 
     if not parts:
         z = np.zeros(0, np.int64)
@@ -118,7 +150,7 @@ def box_box(model, f, s, pf, qf, ps, qs, margin=0.0):
     return row, slot.astype(np.int64), point, normal, depth
 
 
-def _edge_contacts(E, i, j, L, sep, A, ha, pa, B, hb, pb, t):
+def _edge_contacts(E, i, j, C, sep, A, ha, pa, B, hb, pb, t):
     """One point per pair, midway between the closest points of the two edges
     (the edge of a furthest along n, the edge of b furthest along -n).
 
@@ -127,7 +159,7 @@ def _edge_contacts(E, i, j, L, sep, A, ha, pa, B, hb, pb, t):
     then clamped to the edges' lengths (Ericson 5.1.9). 1 - b² > EDGE_EPS²
     because parallel edges never give an edge axis."""
     m = np.arange(len(E))
-    n = L[E, i, j]
+    n = edge_axis(A[E], C[E], i, j)
     n = n * _sign(np.einsum("ki,ki->k", n, t[E]))[:, None]
     Ae, Be, hae, hbe = A[E], B[E], ha[E], hb[E]
     sa = _sign(np.einsum("kmi,ki->km", Ae, n))
@@ -170,73 +202,67 @@ def clip_faces(ref_c, ref_ax, ref_h, axis, n_ref, inc_c, inc_ax, inc_h, margin):
     hv = ref_h[r, (axis + 2) % 3][:, None]
     fc = ref_c + n_ref * ref_h[r, axis][:, None]
     eps = 1e-9 * (hu + hv) + 1e-12
+    frame = np.stack([U, V, n_ref], axis=1)                # rows: the reference frame's axes
+    inc = np.einsum("kai,kbi->kba", frame, inc_ax)         # incident axes in that frame
 
     # incident face: the face of the other box most opposed to n_ref
-    j = np.argmax(np.abs(np.einsum("kmi,ki->km", inc_ax, n_ref)), axis=1)
-    n_inc = inc_ax[r, j] * -_sign(np.einsum("ki,ki->k", inc_ax[r, j], n_ref))[:, None]
-    e1_dir, e2_dir = inc_ax[r, (j + 1) % 3], inc_ax[r, (j + 2) % 3]
+    j = np.argmax(np.abs(inc[:, :, 2]), axis=1)
+    n_inc = inc[r, j] * -_sign(inc[r, j, 2])[:, None]
+    e1, e2 = inc[r, (j + 1) % 3], inc[r, (j + 2) % 3]
     h1, h2 = inc_h[r, (j + 1) % 3][:, None], inc_h[r, (j + 2) % 3][:, None]
-    ic = inc_c + n_inc * inc_h[r, j][:, None]
-    verts = (ic[:, None, :] + QUAD_SIGNS[None, :, 0, None] * (h1[:, :, None] * e1_dir[:, None, :])
-             + QUAD_SIGNS[None, :, 1, None] * (h2[:, :, None] * e2_dir[:, None, :]))
-    rel = verts - fc[:, None, :]
-    vu = np.einsum("kvi,ki->kv", rel, U)
-    vv = np.einsum("kvi,ki->kv", rel, V)
-    vw = np.einsum("kvi,ki->kv", rel, n_ref)
+    ic = np.einsum("kai,ki->ka", frame, inc_c - fc) + n_inc * inc_h[r, j][:, None]
+    s1, s2 = QUAD_SIGNS[None, :, 0, None], QUAD_SIGNS[None, :, 1, None]
+    P = ic[:, None, :] + s1 * (h1 * e1)[:, None, :] + s2 * (h2 * e2)[:, None, :]   # (m, 4, 3)
+    vu, vv, vw = P[..., 0], P[..., 1], P[..., 2]
 
     # 1. incident corners inside the rectangle
     ok1 = (np.abs(vu) <= hu + eps) & (np.abs(vv) <= hv + eps)
 
-    # 2. rectangle corners inside the incident face, lifted onto its plane:
-    #    w = n_inc·(ic - x0) / (n_inc·n_ref), |n_inc·n_ref| >= 1/√3 by the choice of face
+    # 2. rectangle corners inside the incident face, lifted onto its plane
+    #    n·((u, v, w) - ic) = 0; |n_w| >= 1/√3 by the choice of face
     cu2 = QUAD_SIGNS[None, :, 0] * hu
     cv2 = QUAD_SIGNS[None, :, 1] * hv
-    x0 = fc[:, None, :] + cu2[..., None] * U[:, None, :] + cv2[..., None] * V[:, None, :]
-    cos = np.einsum("ki,ki->k", n_inc, n_ref)[:, None]
-    cw2 = np.einsum("ki,kvi->kv", n_inc, ic[:, None, :] - x0) / cos
-    on_inc = x0 + cw2[..., None] * n_ref[:, None, :] - ic[:, None, :]
-    ok2 = ((np.abs(np.einsum("kvi,ki->kv", on_inc, e1_dir)) <= h1 + eps)
-           & (np.abs(np.einsum("kvi,ki->kv", on_inc, e2_dir)) <= h2 + eps))
+    du, dv = cu2 - ic[:, :1], cv2 - ic[:, 1:2]
+    dw = -(n_inc[:, :1] * du + n_inc[:, 1:2] * dv) / n_inc[:, 2:]
+    cw2 = ic[:, 2:] + dw
+    ok2 = ((np.abs(du * e1[:, :1] + dv * e1[:, 1:2] + dw * e1[:, 2:]) <= h1 + eps)
+           & (np.abs(du * e2[:, :1] + dv * e2[:, 1:2] + dw * e2[:, 2:]) <= h2 + eps))
 
-    # 3. incident edges (corner v to v+1) crossing the sides u = ±hu and v = ±hv
-    nxt = [1, 2, 3, 0]
-    P = np.stack([vu, vv, vw], axis=-1)                    # (m, 4, 3)
-    D = P[:, nxt] - P
-    side_u = np.stack([hu, -hu], axis=-1)                  # (m, 1, 2)
-    side_v = np.stack([hv, -hv], axis=-1)
-    cross = []
-    for along, other, sides, lim in ((0, 1, side_u, hv), (1, 0, side_v, hu)):
-        den = D[:, :, along][..., None]                    # (m, 4, 1)
+    # 3. incident edges (corner v to v+1) crossing the sides u = ±hu and v = ±hv:
+    #    at fraction f = (side - P_along) / D_along of the edge
+    D = P[:, [1, 2, 3, 0]] - P
+    cand = [(vu, vv, vw, ok1), (cu2, cv2, cw2, ok2)]
+    for along, other, half, lim in ((0, 1, hu, hv), (1, 0, hv, hu)):
+        side = np.stack([half, -half], axis=-1)            # (m, 1, 2): the two sides
+        den = D[:, :, along, None]                         # (m, 4, 1)
         good = np.abs(den) > 1e-14
-        s = (sides - P[:, :, along][..., None]) / np.where(good, den, 1.0)
-        pt = P[:, :, None, :] + s[..., None] * D[:, :, None, :]      # (m, 4, 2, 3)
-        ok = good & (s >= 0.0) & (s <= 1.0) & (np.abs(pt[..., other]) <= (lim + eps)[..., None])
-        cross.append((pt.reshape(m, 8, 3), ok.reshape(m, 8)))
-
-    cu = np.concatenate([vu, cu2, cross[0][0][..., 0], cross[1][0][..., 0]], axis=1)
-    cv = np.concatenate([vv, cv2, cross[0][0][..., 1], cross[1][0][..., 1]], axis=1)
-    cw = np.concatenate([vw, cw2, cross[0][0][..., 2], cross[1][0][..., 2]], axis=1)
-    ok = np.concatenate([ok1, ok2, cross[0][1], cross[1][1]], axis=1) & (cw < margin)
+        f = (side - P[:, :, along, None]) / np.where(good, den, 1.0)          # (m, 4, 2)
+        co = P[:, :, other, None] + f * D[:, :, other, None]
+        cw = (P[:, :, 2, None] + f * D[:, :, 2, None]).reshape(m, 8)
+        ok = (good & (f >= 0.0) & (f <= 1.0) & (np.abs(co) <= lim[:, :, None] + eps[:, :, None])).reshape(m, 8)
+        sides = np.broadcast_to(side, (m, 4, 2)).reshape(m, 8)
+        co = co.reshape(m, 8)
+        cand.append((sides, co, cw, ok) if along == 0 else (co, sides, cw, ok))
+    cu, cv, cw, ok = (np.concatenate(c, axis=1) for c in zip(*cand))
+    ok &= cw < margin
     cu = np.clip(cu, -hu, hu)
     cv = np.clip(cv, -hv, hv)
 
-    # reduce to the extreme candidate along each diagonal of the smaller face
-    inc_smaller = (h1 * h2 < hu * hv)[:, 0]
-    g1 = np.where(inc_smaller[:, None],
-                  np.stack([np.einsum("ki,ki->k", e1_dir, U), np.einsum("ki,ki->k", e1_dir, V)], 1) / h1,
-                  np.concatenate([1.0 / hu, np.zeros_like(hu)], 1))
-    g2 = np.where(inc_smaller[:, None],
-                  np.stack([np.einsum("ki,ki->k", e2_dir, U), np.einsum("ki,ki->k", e2_dir, V)], 1) / h2,
-                  np.concatenate([np.zeros_like(hv), 1.0 / hv], 1))
-    a1 = cu * g1[:, :1] + cv * g1[:, 1:]                   # (m, 24) coordinate along each face axis
-    a2 = cu * g2[:, :1] + cv * g2[:, 1:]
-    score = QUAD_SIGNS[None, :, 0, None] * a1[:, None, :] + QUAD_SIGNS[None, :, 1, None] * a2[:, None, :]
-    score = np.where(ok[:, None, :], score, -np.inf)       # (m, 4 quadrants, 24)
-    pick = np.argmax(score, axis=2)
-    keep = np.take_along_axis(score, pick[..., None], axis=2)[..., 0] > -np.inf
-    pu = np.take_along_axis(cu, pick, axis=1)
-    pv = np.take_along_axis(cv, pick, axis=1)
-    pw = np.take_along_axis(cw, pick, axis=1)
+    # reduce to the extreme candidate along each diagonal of the smaller face:
+    # coordinates along that face's two axes, scaled by its half sizes
+    inc_smaller = (h1 * h2 < hu * hv)
+    g1u = np.where(inc_smaller, e1[:, :1] / h1, 1.0 / hu)
+    g1v = np.where(inc_smaller, e1[:, 1:2] / h1, 0.0)
+    g2u = np.where(inc_smaller, e2[:, :1] / h2, 0.0)
+    g2v = np.where(inc_smaller, e2[:, 1:2] / h2, 1.0 / hv)
+    a1 = cu * g1u + cv * g1v                               # (m, 24)
+    a2 = cu * g2u + cv * g2v
+    pick = np.empty((m, 4), np.int64)
+    for q, (q1, q2) in enumerate(QUAD_SIGNS):
+        pick[:, q] = np.argmax(np.where(ok, q1 * a1 + q2 * a2, -np.inf), axis=1)
+    flat = pick + cu.shape[1] * r[:, None]                 # index into the (m, 24) candidates
+    keep = ok.ravel().take(flat)
+    pu, pv, pw = cu.ravel().take(flat), cv.ravel().take(flat), cw.ravel().take(flat)
     for q in range(1, 4):
         for p in range(q):
             same = (np.abs(pu[:, q] - pu[:, p]) + np.abs(pv[:, q] - pv[:, p])
