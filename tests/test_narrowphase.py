@@ -440,3 +440,18 @@ def test_keys_stay_put_for_a_resting_stack():
                                box("up", (0.5, 0.5, 0.5), (0.01, 0, 1.498)),
                                box("top", (0.2, 0.3, 0.2), (0, 0, 2.197), axis_angle((0, 0, 1), 0.5))], 5)
     assert len(set(keys)) == 1 and len(keys[0]) == 12
+
+
+def test_box_pairs_in_blocks_match_one_block(monkeypatch):
+    from physics_core.collision import narrow_box
+    rng = np.random.default_rng(9)
+    bodies = [box(f"b{k}", rng.uniform(0.1, 0.5, 3), rng.uniform(-1, 1, 3), qt.normalize(rng.normal(size=4)))
+              for k in range(30)]
+    model = build_model({"dt": 0.01, "bodies": bodies})
+    pos, quat = np.array(model.initial["pos"]), np.array(model.initial["quat"])
+    whole = detect(model, pos, quat, 0.02)
+    monkeypatch.setattr(narrow_box, "BOX_BLOCK", 7)
+    blocks = detect(model, pos, quat, 0.02)
+    assert len(whole) > 40
+    for f in ("a", "b", "point", "normal", "depth", "key"):
+        assert np.array_equal(getattr(whole, f), getattr(blocks, f))
