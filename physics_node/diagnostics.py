@@ -2,7 +2,7 @@
 
 import time
 
-from msg_adapters.diagnostics import OK, WARN, diagnostic_array
+from msg_adapters.diagnostics import ERROR, OK, WARN, diagnostic_array
 
 STATUS_NAME = "physics: simulation"
 
@@ -33,7 +33,7 @@ class DiagnosticsWindow:
         self.dropped_total[reason] = self.dropped_total.get(reason, 0) + 1
         self._dropped += 1
 
-    def report(self, stamp_ns, hardware_id, paused, target_rtf, recording):
+    def report(self, stamp_ns, hardware_id, paused, target_rtf, recording, fault=""):
         """DiagnosticArray for the window just ended; opens the next one."""
         now = time.monotonic()
         w = self.world
@@ -61,7 +61,9 @@ class DiagnosticsWindow:
         for stage, seconds in profile.items():
             spent = seconds - self._profile_start.get(stage, 0.0)
             values[f"stage_{stage}_ms"] = 1e3 * max(spent, 0.0) / steps
-        if self._dropped:
+        if fault:
+            level, message = ERROR, f"stopped: {fault}"
+        elif self._dropped:
             level, message = WARN, f"{self._dropped} bad commands dropped in the last {wall:.1f} s"
         else:
             level, message = OK, "paused" if paused else "running"

@@ -110,7 +110,10 @@ def main(argv=None):
     status = 0
     try:
         node = PhysicsNode(parameter_overrides=parameter_overrides(args))
-        print(how_to_push(node), flush=True)
+        try:
+            print(how_to_push(node), flush=True)
+        except OSError:
+            pass  # no usable stdout (closed pipe): the node runs on regardless
         executor = SingleThreadedExecutor()
         executor.add_node(node)
         while rclpy.ok() and not node.finished and not stop.requested:

@@ -8,6 +8,7 @@ in `stepping.py`, message shapes in `msg_adapters`, the file in `recorder.py`.
 import os
 import re
 import time
+import warnings
 
 from geometry_msgs.msg import WrenchStamped
 from rcl_interfaces.msg import SetParametersResult
@@ -53,9 +54,16 @@ class PhysicsNode(Node):
         super().__init__(NODE_NAME, parameter_overrides=parameter_overrides or [])
         self.settings = declare(self)
         self.scene_path = self.settings.scene or default_scene_path()
-        self.world = load_scene(self.scene_path)
+        # The loader warns about what it had to assume (e.g. friction pairs
+        # it does not know); those belong in the node's log.
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            self.world = load_scene(self.scene_path)
+        for w in caught:
+            self.get_logger().warning(str(w.message))
         self.model = self.world.model
         self.finished = False
+        self.faulted = ""  # why the world cannot step, until reset
         self.paused = self.settings.paused
         self.stepper = Stepper(self.world, self.settings.command_timeout, error_types=(CommandError, ValueError))
         self.pacer = StepPacer(self.world.dt, self.settings.real_time_factor)
@@ -142,6 +150,9 @@ class PhysicsNode(Node):
             self.outputs.record_command(command, applied_ns, boundary.step)
         for command, error in boundary.rejected:
             self._drop(command.topic, REJECTED, str(error))
+        if boundary.failure is not None:
+            self._halt(boundary.failure)
+            return
         w = self.world
         now_ns = sim_time_ns(w.time)
         self.outputs.send_clock(now_ns, w.step_index)
@@ -152,6 +163,12 @@ class PhysicsNode(Node):
         if duration > 0 and w.time >= duration - 0.5 * w.dt:
             self.finished = True
             self.get_logger().info(f"reached duration {duration:g} s of sim time after {w.step_index} steps")
+
+    def _halt(self, error):
+        """The state went non-finite: stop stepping until a reset."""
+        self.faulted = str(error)
+        self.set_parameters([Parameter("paused", Parameter.Type.BOOL, True)])
+        self.get_logger().error(f"simulation stopped: {error}; call reset_simulation to start again")
 
     # -- commands -------------------------------------------------------------
     def _command_callback(self, body, kind):
@@ -217,16 +234,25 @@ class PhysicsNode(Node):
         self.outputs.send_state(self.world, t0, step)
         self.pacer.restart(time.monotonic())
         self.finished = False
+        self.faulted = ""
         note = f"; {discarded} queued commands discarded" if discarded else ""
         self.get_logger().info(f"world reset to its initial state{note}")
         return response
 
     def _on_step(self, _request, response):
+        if self.faulted:
+            response.success = False
+            response.message = f"cannot step: {self.faulted}; call reset_simulation"
+            return response
         if not self.paused:
             response.success = False
             response.message = "not paused: call pause_physics first"
             return response
         self._advance(publish_all=True)
+        if self.faulted:
+            response.success = False
+            response.message = f"the step failed: {self.faulted}"
+            return response
         response.success = True
         response.message = f"step {self.world.step_index}, t = {self.world.time:.9g} s"
         return response
@@ -238,6 +264,8 @@ class PhysicsNode(Node):
                 coerce(p.name, p.value)
             except ParameterValueError as exc:
                 return SetParametersResult(successful=False, reason=str(exc))
+            if p.name == "paused" and p.value is False and self.faulted:
+                return SetParametersResult(successful=False, reason=f"{self.faulted}; call reset_simulation first")
         return SetParametersResult(successful=True)
 
     def _apply_parameters(self, params):
@@ -260,6 +288,7 @@ class PhysicsNode(Node):
             sim_time_ns(self.world.time),
             hardware_id=self.get_fully_qualified_name(),
             paused=self.paused,
+            fault=self.faulted,
             target_rtf=self.settings.real_time_factor,
             recording=self.recorder.path if self.recorder else "",
         )

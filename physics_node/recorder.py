@@ -131,6 +131,7 @@ class Recorder:
     def write(self, topic, msg_class, data, time_ns, step=0, qos=STREAM):
         """One CDR-serialized message at sim time `time_ns` of step `step`."""
         channel_id = self.channel(topic, msg_class, qos)
+        self._require_open()
         self._writer.add_message(
             channel_id=channel_id, log_time=int(time_ns), publish_time=int(time_ns), data=data, sequence=int(step)
         )

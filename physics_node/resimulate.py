@@ -9,6 +9,7 @@ PoseArray is then compared with the recomputed state bit for bit.
 import os
 import re
 import tempfile
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -85,13 +86,15 @@ def _load_world(recording):
     scene = recording.attachment(media_type=SCENE_MEDIA_TYPE)
     if scene is None:
         raise ResimulationError("the recording has no scene attachment")
-    suffix = os.path.splitext(scene.name)[1] or ".yaml"
-    # Loaded from a file, as the node loaded it, so the same loader path runs.
+    # Loaded from a file of the same name, as the node loaded it, so the same
+    # loader path runs; what the loader warns about was logged when recording.
     with tempfile.TemporaryDirectory() as tmp:
-        path = os.path.join(tmp, "scene" + suffix)
+        path = os.path.join(tmp, os.path.basename(scene.name) or "scene.yaml")
         with open(path, "wb") as f:
             f.write(scene.data)
-        return load_scene(path)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return load_scene(path)
 
 
 def resimulate(path):
@@ -121,10 +124,12 @@ def _resimulate(recording):
                 "without a reset event"
             )
         while world.step_index < step:
-            rejected = stepper.advance().rejected
-            if rejected:
-                command, error = rejected[0]
+            boundary = stepper.advance()
+            if boundary.rejected:
+                command, error = boundary.rejected[0]
                 raise ResimulationError(f"recorded command on {command.topic} was refused on re-apply: {error}")
+            if boundary.failure is not None:
+                raise ResimulationError(f"the engine failed at step {boundary.step}: {boundary.failure}")
 
     for m in recording.messages():
         if m.topic == poses_topic:

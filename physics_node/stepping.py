@@ -7,6 +7,8 @@ it; neither publishes nor records anything here.
 from collections import deque
 from dataclasses import dataclass, field
 
+from physics_core import NonFiniteStateError
+
 from .commands import CommandApplier, clear_command
 
 
@@ -18,6 +20,7 @@ class Boundary:
     time: float  # sim time of that boundary, s
     applied: list = field(default_factory=list)
     rejected: list = field(default_factory=list)  # (command, error)
+    failure: Exception = None  # the engine's error if the step blew up
 
 
 class Stepper:
@@ -52,7 +55,12 @@ class Stepper:
             self.applier.apply(command)
             boundary.applied.append(command)
         self.applier.prepare_step()
-        w.step()
+        try:
+            w.step()
+        except NonFiniteStateError as exc:
+            # Finite commands can still drive the state to inf (a force of
+            # 1e300 N); the caller decides what to do with a broken world.
+            boundary.failure = exc
         return boundary
 
     def reset(self):

@@ -219,6 +219,47 @@ def test_bad_commands_are_dropped_counted_and_survived(sim):
     assert "dropped a command" in node.log()
 
 
+def test_a_blown_up_state_pauses_until_reset(sim):
+    node, driver = sim
+    fresh(driver)
+    # Finite, but the spin it gives overflows within a few steps.
+    send(driver, "/physics/ball/wrench", (0, 0, 0), (0, 0, 1e308))
+    replies = [driver.call(Trigger, "/physics/step") for _ in range(6)]
+    failed = [r for r in replies if not r.success]
+    assert failed and "reset_simulation" in failed[-1].message
+    diagnostics = driver.received["/diagnostics"]
+    driver.spin_until(
+        lambda: diagnostics and diagnostics[-1].status[0].level == DiagnosticStatus.ERROR, 5.0, "an ERROR status"
+    )
+    assert node.alive()
+    driver.call(Empty, "/reset_simulation")
+    assert driver.call(Trigger, "/physics/step").success
+
+
+def _set(driver, **values):
+    from rcl_interfaces.srv import SetParameters
+    from rclpy.parameter import Parameter
+
+    request = SetParameters.Request(parameters=[Parameter(k, value=v).to_parameter_msg() for k, v in values.items()])
+    return [r.successful for r in driver.call(SetParameters, "/physics/set_parameters", request=request).results]
+
+
+def test_parameters_change_while_running_and_bad_values_are_refused(sim):
+    node, driver = sim
+    fresh(driver)
+    assert _set(driver, real_time_factor=-1.0) == [False]
+    assert _set(driver, publish_every=0) == [False]
+    assert _set(driver, scene="/elsewhere.yaml") == [False]  # read-only while running
+    assert _set(driver, real_time_factor=0, publish_every=5) == [True, True]  # an integer is fine
+    clocks = driver.received["/clock"]
+    assert _set(driver, paused=False) == [True]
+    driver.spin_until(lambda: clocks and time_ns(clocks[-1].clock) > 50 * FREE_DT_NS, 5.0, "fast steps")
+    assert _set(driver, paused=True, real_time_factor=2.0, publish_every=1) == [True, True, True]
+    driver.spin_for(0.3)
+    stamps = {time_ns(m.header.stamp) // FREE_DT_NS for m in driver.received["/physics/poses"]}
+    assert stamps and all(k % 5 == 0 for k in stamps if k > 1)
+
+
 def test_bodies_topic_is_latched_with_one_marker_per_body(sim):
     from visualization_msgs.msg import Marker, MarkerArray
 

@@ -194,12 +194,12 @@ class Driver:
         pytest.fail(f"timed out after {timeout} s waiting for {what}")
 
     # -- services -------------------------------------------------------------
-    def call(self, srv_type, name, timeout=10.0):
+    def call(self, srv_type, name, timeout=10.0, request=None):
         client = self._clients.get(name)
         if client is None:
             client = self.node.create_client(srv_type, name)
             self._clients[name] = client
         self.spin_until(client.service_is_ready, timeout, f"service {name}")
-        future = client.call_async(srv_type.Request())
+        future = client.call_async(request if request is not None else srv_type.Request())
         self.spin_until(future.done, timeout, f"reply from {name}")
         return future.result()
