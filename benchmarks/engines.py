@@ -5,7 +5,8 @@ position)]` with shape "box" (size = half extents) or "sphere" (size =
 radius), all of `MASS` kg, and the same step for every engine: dt, solver
 iterations, no sleeping (every body awake: the worst case, and the only one
 all three engines can be put in). `build(engine, bodies)` returns a
-`step(n)` callable and a `positions()` reader.
+`step(n)` callable, a `positions()` reader and a `stages()` reader (seconds
+per named stage so far; this engine only, None for the others).
 """
 import numpy as np
 
@@ -35,7 +36,8 @@ def _ours(bodies, dt, iterations):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)     # default-material friction fallback
         world = load_scene(scene)
-    return (lambda n: world.step(n)), (lambda: world.state.pos[1:].copy())
+    return (lambda n: world.step(n)), (lambda: world.state.pos[1:].copy()), \
+        (lambda: dict(world.profile))
 
 
 def _pybullet(bodies, dt, iterations):
@@ -65,7 +67,7 @@ def _pybullet(bodies, dt, iterations):
 
     def positions():
         return np.array([p.getBasePositionAndOrientation(b, physicsClientId=client)[0] for b in ids])
-    return step, positions
+    return step, positions, lambda: None
 
 
 def _mujoco(bodies, dt, iterations):
@@ -88,4 +90,4 @@ def _mujoco(bodies, dt, iterations):
 
     def positions():
         return data.xpos[1:].copy()
-    return step, positions
+    return step, positions, lambda: None

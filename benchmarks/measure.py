@@ -2,14 +2,13 @@
 
 A fresh process per measurement keeps one engine's caches and allocations
 out of another's numbers, and lets the peak resident memory (ru_maxrss) be
-read for that run alone. Run as
+read for that run alone (VmHWM). Run as
 `python -m benchmarks.measure SCENE_MODULE SCENE_FUNCTION N ENGINE STEPS`;
 prints one JSON line.
 """
 import importlib
 import json
 import os
-import resource
 import subprocess
 import sys
 from time import perf_counter
@@ -22,6 +21,16 @@ def _rss_mb():
         return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2 ** 20
 
 
+def _peak_mb():
+    """Peak resident memory of this process (VmHWM). Not ru_maxrss: Linux carries that
+    across fork and exec, so a child would report its parent's peak."""
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) / 1024.0
+    return float("nan")
+
+
 def measure_here(scene_module, scene_function, n, engine, steps):
     from . import engines
     bodies = getattr(importlib.import_module(scene_module), scene_function)(n)
@@ -29,18 +38,24 @@ def measure_here(scene_module, scene_function, n, engine, steps):
     importlib.import_module(engine)
     base = _rss_mb()
     t0 = perf_counter()
-    step, positions = engines.build(engine, bodies)
+    step, positions, stages = engines.build(engine, bodies)
     build = perf_counter() - t0
     step(WARMUP)
+    before = stages() or {}
     t0 = perf_counter()
     step(steps)
     elapsed = perf_counter() - t0
     pos = positions()
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    after = stages()
+    # where this engine's time goes: seconds per step in each named stage
+    profile = None if after is None else {
+        k: (v - before.get(k, 0.0)) / steps for k, v in after.items() if k != "step"}
+    peak = _peak_mb()
     return {"engine": engine, "bodies": len(bodies), "steps": steps, "seconds": elapsed,
             "steps_per_second": steps / elapsed, "body_steps_per_second": len(bodies) * steps / elapsed,
             "build_seconds": build, "peak_rss_mb": peak, "baseline_rss_mb": base,
-            "scene_mb": max(0.0, peak - base), "min_z": float(pos[:, 2].min()) if len(pos) else 0.0}
+            "scene_mb": max(0.0, peak - base), "min_z": float(pos[:, 2].min()) if len(pos) else 0.0,
+            "stage_seconds_per_step": profile}
 
 
 def measure(scene_module, scene_function, n, engine, steps, timeout=1800):

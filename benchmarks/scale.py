@@ -1,0 +1,199 @@
+"""`physics-bench scale`: this engine beside PyBullet and MuJoCo, 1 to 10,000 bodies.
+
+- box pyramid (pyramid.py), measured here, each engine and size in a fresh
+  process (measure.py): steps/s, body-steps/s, peak memory, and where this
+  engine's step time goes (its stage profile);
+- sphere piles, from benchmarks/pile_compare.py.
+
+Writes `scale.md`, `scale.json` and `scale_pyramid.png`.
+"""
+import importlib
+import importlib.util
+
+from . import engines
+from . import markdown as md
+from . import plotting
+from .contact_support import available
+from .measure import measure
+from .progress import Progress
+from .results_io import machine, write_json, write_text
+
+SIZES = {True: (1, 10, 100, 1000), False: (1, 10, 100, 1000, 10000)}
+STEP_BUDGET = 20000          # body-steps per measurement: fewer steps for bigger scenes
+
+
+def steps_for(n, quick):
+    lo, hi = (10, 100) if quick else (10, 200)
+    return int(min(hi, max(lo, STEP_BUDGET // max(n, 1))))
+
+
+def run(quick=False, out=None):
+    ok, why = available()
+    data = {"quick": quick, "machine": machine(), "dt": engines.DT,
+            "iterations": engines.ITERATIONS}
+    if not ok:
+        Progress("scale", 1).note(f"skipped: contacts are not available ({why})")
+        data["skipped"] = why
+    else:
+        data["pyramid"] = pyramid_study(quick)
+        data["piles"] = pile_study(quick)
+    if out:
+        write_json(out, "scale.json", data)
+        write_text(out, "scale.md", report(data))
+        if data.get("pyramid"):
+            plot_scale(data["pyramid"], "Box pyramid", f"{out}/scale_pyramid.png")
+    return data
+
+
+def installed(engine):
+    return importlib.util.find_spec(engine) is not None
+
+
+def pyramid_study(quick):
+    sizes = SIZES[quick]
+    prog = Progress("scale", len(sizes) * len(engines.ENGINES))
+    rows = []
+    for n in sizes:
+        for engine in engines.ENGINES:
+            if not installed(engine):
+                rows.append({"engine": engine, "bodies": n, "error": "not installed"})
+                prog.step(f"pyramid {n} boxes, {engine}: not installed "
+                          "(`make compare-extras` installs PyBullet and MuJoCo)")
+                continue
+            r = measure("benchmarks.pyramid", "boxes", n, engine, steps_for(n, quick))
+            r.setdefault("bodies", n)
+            rows.append(r)
+            prog.step(f"pyramid {n} boxes, {engine}: "
+                      + (f"{r['steps_per_second']:.3g} steps/s, peak {r['peak_rss_mb']:.0f} MB"
+                         if "error" not in r else f"failed: {r['error']}"))
+    return rows
+
+
+def pile_study(quick):
+    """The sphere-pile comparison of benchmarks/pile_compare.py, as its own rows."""
+    try:
+        pile_compare = importlib.import_module("benchmarks.pile_compare")
+    except ImportError as e:
+        Progress("scale", 1).note(f"sphere piles skipped: benchmarks/pile_compare.py not available ({e})")
+        return {"skipped": f"benchmarks/pile_compare.py not available ({e})"}
+    rows = pile_compare.run(quick=quick)
+    return {"rows": rows}
+
+
+def by_size(rows):
+    out = {}
+    for r in rows:
+        out.setdefault(r["bodies"], {})[r["engine"]] = r
+    return out
+
+
+def ratio(ours, other):
+    """How many times faster the other engine is (> 1: this engine is behind)."""
+    if not ours or not other or "error" in ours or "error" in other:
+        return None
+    return other["steps_per_second"] / ours["steps_per_second"]
+
+
+def _ratio_text(x):
+    if x is None:
+        return "—"
+    return f"{x:.3g}× faster" if x >= 1 else f"{1 / x:.3g}× slower"
+
+
+def pyramid_table(rows):
+    head = ["boxes"]
+    for e in engines.ENGINES:
+        head += [f"{e} steps/s", f"{e} body-steps/s", f"{e} peak MB"]
+    head += ["PyBullet vs this engine", "MuJoCo vs this engine"]
+    out = []
+    for n, per in sorted(by_size(rows).items()):
+        cells = [n]
+        for e in engines.ENGINES:
+            r = per.get(e)
+            if not r or "error" in r:
+                cells += ["not installed" if r and r["error"] == "not installed" else "failed",
+                          "—", "—"]
+            else:
+                cells += [md.num(r["steps_per_second"]), md.num(r["body_steps_per_second"]),
+                          f"{r['peak_rss_mb']:.0f}"]
+        ours = per.get("physics_core")
+        cells += [_ratio_text(ratio(ours, per.get("pybullet"))),
+                  _ratio_text(ratio(ours, per.get("mujoco")))]
+        out.append(cells)
+    return md.table(head, out, align="r" * len(head))
+
+
+def stage_table(rows):
+    """Where this engine's step time goes, per size: the stage profile."""
+    ours = [r for r in rows if r.get("engine") == "physics_core" and r.get("stage_seconds_per_step")]
+    if not ours:
+        return ""
+    stages = []
+    for r in ours:
+        for k in r["stage_seconds_per_step"]:
+            if k not in stages:
+                stages.append(k)
+    head = ["boxes", "step"] + stages
+    out = []
+    for r in ours:
+        prof = r["stage_seconds_per_step"]
+        total = r["seconds"] / r["steps"]
+        out.append([r["bodies"], md.seconds(total)]
+                   + [f"{100 * prof.get(k, 0.0) / total:.0f}%" for k in stages])
+    return md.table(head, out, align="r" * len(head))
+
+
+def report(data):
+    parts = ["# Scale: this engine beside PyBullet and MuJoCo\n",
+             f"Run: `physics-bench scale{' --quick' if data['quick'] else ''}`, {data['machine']}. "
+             f"Same step for every engine: dt = 1/{round(1 / data['dt'])} s, "
+             f"{data['iterations']} solver iterations, sleeping off (every body awake: "
+             "the worst case, and one all three engines can be put in), one process per "
+             "engine and size. Peak MB: the process's peak resident memory, the engine's "
+             "own import included.\n"]
+    if data.get("skipped"):
+        parts.append(f"_Skipped: contacts are not available ({data['skipped']})._\n")
+        return "\n".join(parts)
+    parts += ["## Box pyramid\n",
+              "One vertical wall of 20 cm cubes, each row half a cube in from the one below, "
+              "started 2 mm apart so that it settles under gravity.\n",
+              "![pyramid](scale_pyramid.png)\n", pyramid_table(data["pyramid"]),
+              "\n### Where this engine's step time goes (box pyramid)\n",
+              stage_table(data["pyramid"])]
+    piles = data.get("piles") or {}
+    parts.append("\n## Sphere piles\n")
+    if "skipped" in piles:
+        parts.append(f"_Skipped: {piles['skipped']}._\n")
+    else:
+        parts.append(generic_table(piles.get("rows") or []))
+    return "\n".join(parts)
+
+
+def generic_table(rows):
+    """A table of rows produced elsewhere (dicts with the same keys)."""
+    if not rows:
+        return "_No rows._\n"
+    head = list(rows[0].keys())
+    fmt = lambda v: md.num(v) if isinstance(v, float) else str(v)
+    return md.table(head, [[fmt(r.get(k, "")) for k in head] for r in rows])
+
+
+def plot_scale(rows, title, path):
+    fig, (ax_s, ax_b) = plotting.figure(ncols=2)
+    for e in engines.ENGINES:
+        mine = sorted((r for r in rows if r.get("engine") == e and "error" not in r),
+                      key=lambda r: r["bodies"])
+        if not mine:
+            continue
+        ax_s.plot([r["bodies"] for r in mine], [r["steps_per_second"] for r in mine],
+                  marker="o", color=plotting.COLORS[e], label=e)
+        ax_b.plot([r["bodies"] for r in mine], [r["body_steps_per_second"] for r in mine],
+                  marker="o", color=plotting.COLORS[e], label=e)
+    ax_s.set_ylabel("steps per second")
+    ax_b.set_ylabel("body-steps per second")
+    for ax in (ax_s, ax_b):
+        ax.set_xlabel("bodies")
+        ax.legend(fontsize=8)
+    ax_s.set_title(f"{title}: steps/s")
+    ax_b.set_title(f"{title}: body-steps/s")
+    plotting.save(fig, path)
