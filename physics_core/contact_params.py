@@ -16,7 +16,11 @@ class ContactParams:
     iterations: int = 8                  # velocity-solver sweeps over all contacts per (sub)step
     solver: str = "gauss_seidel"         # gauss_seidel: graph-coloured batches updated in turn;
                                          # jacobi: one batch with mass splitting (cheaper, softer stacks)
+    velocity_tolerance: float = 1e-4     # m/s; sweeps stop early once none changes a contact's
+                                         # relative velocity by more than this (0: always all sweeps)
     warm_start: float = 1.0              # fraction of last substep's impulses applied first, 0..1
+    static_friction_speed: float = 1e-3  # m/s; a contact slipping slower than this is held by static
+                                         # friction (μ_s), faster it slides with μ_k (COURSE.md 5)
     margin: float = 0.005                # m; pairs closer than this are kept as (speculative) contacts
     # -- restitution (COURSE.md 5, coefficient of restitution, resting contact) --
     restitution_threshold: float = 0.5   # m/s; approach speeds below this bounce with C_R = 0
@@ -30,10 +34,11 @@ class ContactParams:
     max_correction_speed: float = 1.0    # m/s; cap on the push-out rate (position only, never velocity)
     # -- continuous collision (COURSE.md 5, time of collision by bisection) --
     ccd: bool = True                     # time-of-impact for fast bodies so thin walls are not crossed
-    ccd_threshold: float = 0.5           # a body is fast when it moves more than this fraction of its
-                                         # smallest half extent (or radius) in one (sub)step
+    ccd_threshold: float = 0.5           # a body is fast when any of its points moves more than this
+                                         # fraction of its smallest half extent (or radius) in one (sub)step
     ccd_iterations: int = 30             # bisection halvings of [t, t + h] at most
-    ccd_tolerance: float = 1e-4          # m; stop bisecting when the bracket moves a body less than this
+    ccd_tolerance: float = 1e-4          # fraction of the (sub)step: bisection stops when the bracket
+                                         # [t0, t1] is shorter (the body is left apart, at t0)
     # -- sleep (Box2D: bodies at rest leave the solver) --
     sleep: bool = True                   # freeze bodies at rest until touched or commanded
     sleep_linear_speed: float = 0.05     # m/s; below this (and the angular one) a body counts as at rest
@@ -51,7 +56,9 @@ def parse_contacts(r) -> ContactParams:
     return ContactParams(
         iterations=r.number("iterations", d.iterations, min=1, max=1000, integer=True),
         solver=r.string("solver", d.solver, choices=SOLVERS),
+        velocity_tolerance=r.number("velocity_tolerance", d.velocity_tolerance, min=0.0),
         warm_start=r.number("warm_start", d.warm_start, min=0.0, max=1.0),
+        static_friction_speed=r.number("static_friction_speed", d.static_friction_speed, min=0.0),
         margin=r.number("margin", d.margin, min=0.0, max=1.0),
         restitution_threshold=r.number("restitution_threshold", d.restitution_threshold, min=0.0),
         restitution_ramp=r.number("restitution_ramp", d.restitution_ramp, min=0.0),

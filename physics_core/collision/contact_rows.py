@@ -41,6 +41,8 @@ class ContactRows:
     wtt_inv: np.ndarray    # (k, 2, 2) inverse of the tangent block
     mu_s: np.ndarray       # (k,)
     mu_k: np.ndarray
+    mu: np.ndarray         # (k,) the one in use this substep (friction.coefficient_in_use)
+    sliding: np.ndarray    # (k,) bool: held by kinetic friction this substep
     e: np.ndarray          # (k,) pair C_R (before the resting-contact rule)
     u0: np.ndarray         # (k, 3) row velocities before the solve (u0[:, 0] > 0 separating), m/s
     bias: np.ndarray       # (k,) least normal velocity the solve must reach, m/s
@@ -163,5 +165,5 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
     bias = -np.maximum(s0, 0.0) / h
     return ContactRows(a=a, b=b, key=m.key, point=m.point, normal=n, tangent=D[:, 1:, :],
                        depth=m.depth, ab=ab, J=J, M=M, mass_n=mass_n, w_tn=w_tn,
-                       wtt_inv=wtt_inv, mu_s=mu_s, mu_k=mu_k, e=e, u0=u0, bias=bias,
+                       wtt_inv=wtt_inv, mu_s=mu_s, mu_k=mu_k, mu=mu_k.copy(), sliding=np.ones(k, bool), e=e, u0=u0, bias=bias,
                        lam=np.zeros((k, 3)), bounds=np.array([0, k]))

@@ -5,7 +5,9 @@ A contact is identified by its Manifold key (pair and feature). It is
 solver pushed on it (λ_n > 0, which includes a speculative contact about to
 close). Over one step: `begin` if it touches now and did not in the previous
 step, `persist` if it did, `end` (zero impulse, last known point) if it
-touched in the previous step and not in this one. Impulses are summed over
+touched in the previous step and not in this one. A contact whose bodies
+have all gone to sleep (or are static) is frozen, not ended: it is not
+reported while they sleep and continues as `persist` when they wake. Impulses are summed over
 the substeps; the friction impulse is the length of the summed tangential
 impulse vector; point, normal and depth are the last substep's; the normal
 speed is the largest approach speed seen (before the solve, > 0 closing).
@@ -39,8 +41,9 @@ class EventAccumulator:
             depth=rows.depth[t], impulse=lam[t, 0], friction=ft,
             speed=-rows.u0[t, 0]))
 
-    def finish(self) -> ContactEvents:
-        """The step's events; also remembers them for the next step's begin/end."""
+    def finish(self, moving) -> ContactEvents:
+        """The step's events; also remembers them for the next step's begin/end.
+        `moving` (n,) marks awake dynamic bodies."""
         cur = self._merge()
         prev = self.prev
         if cur is None and prev is None:
@@ -54,8 +57,13 @@ class EventAccumulator:
                         friction_impulse=np.sqrt(np.einsum("ij,ij->i", cur["friction"], cur["friction"])),
                         normal_speed=cur["speed"], depth=cur["depth"], body_a=cur["a"],
                         body_b=cur["b"], event=ev)
+        frozen = None
         if prev is not None:
             gone = ~_member(prev["key"], cur["key"]) if cur is not None else np.ones(len(prev["key"]), bool)
+            asleep = gone & ~moving[prev["a"]] & ~moving[prev["b"]]
+            if asleep.any():
+                frozen = {k: v[asleep] for k, v in prev.items()}
+                gone &= ~asleep
             if gone.any():
                 g = np.flatnonzero(gone)
                 z = np.zeros(len(g))
@@ -64,7 +72,7 @@ class EventAccumulator:
                            body_a=prev["a"][g], body_b=prev["b"][g],
                            event=np.full(len(g), END, dtype=np.uint8))
                 cols = end if not cols else {k: np.concatenate([cols[k], end[k]]) for k in cols}
-        self.prev = cur
+        self.prev = _union(cur, frozen)
         self.parts = []
         if not cols:
             return ContactEvents.empty()
@@ -87,6 +95,17 @@ class EventAccumulator:
         return dict(key=keys, a=cat["a"][last], b=cat["b"][last], point=cat["point"][last],
                     normal=cat["normal"][last], depth=cat["depth"][last], impulse=impulse,
                     friction=fr, speed=speed)
+
+
+def _union(cur, frozen):
+    """Touching contacts to remember: this step's plus the sleeping ones, by key."""
+    if frozen is None:
+        return cur
+    if cur is None:
+        return frozen
+    cat = {k: np.concatenate([cur[k], frozen[k]]) for k in cur}
+    order = np.argsort(cat["key"], kind="stable")
+    return {k: v[order] for k, v in cat.items()}
 
 
 def _member(keys, sorted_ref):

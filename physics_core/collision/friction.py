@@ -1,5 +1,16 @@
 """Friction at contacts (COURSE.md 2 and 5): coefficients, tangent plane, static/kinetic cap.
 
+Static or kinetic is decided per contact and substep from how fast it was
+slipping at the end of the last substep's solve (`static_friction_speed`;
+the slip now would count the push this substep's forces just gave a resting
+contact; a new contact starts static for one substep, which at worst holds a
+contact that lands sliding with μ_s instead of μ_k that once). Within the
+solve the friction impulse is then bounded by μ_s λ_n (sticking) or μ_k λ_n
+(sliding, directed against the slip). Deciding inside the
+iterations instead, on the impulse the solver happens to ask for, lets one
+point of a box on an incline flip to kinetic, pass its load to the others,
+and the whole box creep where it should stand.
+
 Friction is two impulse rows in the tangent plane, solved together so the
 tangential impulse is one vector. The course's tangent
 `t = (n × (v_A − v_B)) × n` is undefined when the relative velocity is
@@ -34,13 +45,26 @@ def tangent_basis(normal):
     return t1, t2
 
 
-def cap(lam_t, lam_n, mu_s, mu_k):
-    """The accumulated tangential impulse (k, 2) allowed by Coulomb's law.
-
-    Static while the impulse needed to stop sliding stays within μ_s j_n;
-    otherwise the contact slides and the impulse is μ_k j_n in the direction
-    of the needed one (COURSE.md 5, friction as impulses)."""
-    mag = np.sqrt(lam_t[:, 0] ** 2 + lam_t[:, 1] ** 2)
-    stick = mag <= mu_s * lam_n
-    scale = np.where(stick, 1.0, mu_k * lam_n / np.maximum(mag, _TINY))
-    return lam_t * scale[:, None]
+def cap(lam_t, lam_n, mu, sliding, slip_velocity):
+    """The accumulated tangential impulse (k, 2) allowed by Coulomb's law,
+    |λ_t| ≤ μ λ_n. A larger one is brought back onto the cone: for a contact
+    that is sliding (`sliding`, kinetic friction) it becomes μ_k λ_n against
+    the slip velocity (k, 2), the course's kinetic impulse μ_k j along −t with
+    t the unit tangential relative velocity; for a sticking contact it keeps
+    the direction of the impulse that would stop it (the static bound)."""
+    mag2 = np.einsum("ij,ij->i", lam_t, lam_t)
+    lim = mu * lam_n
+    over = mag2 > lim * lim
+    if not over.any():
+        return lam_t
+    out = lam_t.copy()
+    o = np.flatnonzero(over)
+    mag = np.sqrt(mag2[o])
+    direction = lam_t[o] / mag[:, None]
+    v = slip_velocity[o]
+    speed = np.sqrt(np.einsum("ij,ij->i", v, v))
+    against = sliding[o] & (speed > _TINY)
+    if against.any():
+        direction[against] = -v[against] / speed[against, None]
+    out[o] = lim[o, None] * direction
+    return out

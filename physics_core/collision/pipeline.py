@@ -2,10 +2,10 @@
 import numpy as np
 
 from .. import quaternion as qt
-from . import contact_rows, restitution, sleep, solver
+from . import contact_rows, friction, restitution, sleep, solver
 from .coloring import batches, color_contacts
 from .events import EventAccumulator
-from .manifold import detect
+from .manifold import Manifold, detect
 from .warm_start import WarmCache
 
 SCRATCH_KEY = "contacts"
@@ -24,6 +24,7 @@ class ContactScratch:
         self.V0 = None            # (n, 6) velocities the integrator moved the bodies with
         self.rewound = None       # (n,) bool: bodies the ccd stage moved back this substep
         self.bounce = None        # (bodies, τ) of this substep's restitution contacts
+        self.sweeps = 0           # velocity sweeps the last solve needed
         self.colour_key = None    # colouring cache: keys and awake set it was made for
         self.colour_awake = None
         self.colour = None
@@ -68,7 +69,10 @@ class ContactPipeline:
             sc.events.reset()
         if p.sleep:
             sc.sleep.sync(s.awake)
-        m = detect(model, s.pos, s.quat, p.margin)
+        if (s.awake & ~model.is_static).any():
+            m = detect(model, s.pos, s.quat, p.margin)
+        else:
+            m = Manifold.empty()     # all asleep: nothing can start touching
         if p.sleep and len(m):
             sleep.wake_touched(world, sc.sleep, m.a, m.b, m.depth, p)
         moving = ~model.is_static & s.awake
@@ -97,7 +101,11 @@ class ContactPipeline:
             iw, iso = contact_rows.world_inverse_inertia(s.quat, world.inv_inertia), None
         rows = contact_rows.build(model, m, s.pos, inv_mass, iw, iso, V, h, p, split, sc.rewound)
         rows.bounds = bounds
-        sc.warm.load(rows, p.warm_start)
+        # a new contact starts held by static friction; from its next substep
+        # on, its slip after the solve tells whether it slides
+        slip = np.nan_to_num(sc.warm.load(rows, p.warm_start), nan=0.0)
+        rows.sliding = slip > p.static_friction_speed
+        rows.mu = np.where(rows.sliding, rows.mu_k, rows.mu_s)
         sc.rows, sc.V = rows, V
 
     def _batches(self, sc, m, moving):
@@ -120,8 +128,9 @@ class ContactPipeline:
         if rows is None:
             return
         solver.warm_start(sc.V, rows, self.summed)
-        solver.solve_velocities(sc.V, rows, self.p.iterations, self.summed)
-        sc.warm.store(rows)
+        sc.sweeps = solver.solve_velocities(sc.V, rows, self.p.iterations, self.summed,
+                                            self.p.velocity_tolerance)
+        sc.warm.store(rows, solver.tangential_slip(sc.V, rows))
 
     def restitution(self, world, h):
         sc = self.scratch(world)
@@ -188,7 +197,7 @@ class ContactPipeline:
         if sc.rows is not None:
             sc.events.add(sc.rows)
         if self._last_substep(world):
-            world.contacts = sc.events.finish()
+            world.contacts = sc.events.finish(~self.model.is_static & world.state.awake)
 
     def sleep(self, world, h):
         if not self._last_substep(world):

@@ -61,7 +61,7 @@ def wake_touched(world, sleep_state, a, b, depth, params):
     if not asleep.any() or not len(a):
         return False
     mover = dyn & awake & (sleep_state.timer < params.sleep_time)
-    touch = depth >= 0.0
+    touch = np.ones(len(a), bool)     # every row is within the contact margin
     hit_b = touch & mover[a] & asleep[b]
     hit_a = touch & mover[b] & asleep[a]
     if not (hit_a.any() or hit_b.any()):

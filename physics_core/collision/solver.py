@@ -45,6 +45,12 @@ def _slices(rows):
     return [slice(int(bd[i]), int(bd[i + 1])) for i in range(len(bd) - 1)]
 
 
+def tangential_slip(V, rows):
+    """(k,) speed of sliding at each contact, |v_t|, with the velocities V."""
+    u = np.einsum("kri,ki->kr", rows.J[:, 1:, :], V[rows.ab].reshape(len(rows), 12))
+    return np.sqrt(np.einsum("ij,ij->i", u, u))
+
+
 def warm_start(V, rows, summed):
     """Apply the accumulated impulses λ the rows start with."""
     if not len(rows) or not rows.lam.any():
@@ -53,11 +59,16 @@ def warm_start(V, rows, summed):
     np.add.at(V, rows.ab.reshape(-1), d.reshape(-1, 6))
 
 
-def solve_velocities(V, rows, iterations, summed):
-    """Normal (non-penetration, target rows.bias) and friction rows, `iterations` sweeps."""
+def solve_velocities(V, rows, iterations, summed, tolerance=0.0):
+    """Normal (non-penetration, target rows.bias) and friction rows, at most
+    `iterations` sweeps; stops after a sweep in which no impulse change moved
+    a contact's relative velocity by more than `tolerance` (m/s).
+    Returns the number of sweeps done."""
     slices = _slices(rows)
     lam = rows.lam
-    for _ in range(iterations):
+    w_nn = 1.0 / rows.mass_n
+    for sweep in range(iterations):
+        change = 0.0
         for s in slices:
             ab, VAB, u = _gather(V, rows, s)
             ln_old = lam[s, 0]
@@ -68,11 +79,16 @@ def solve_velocities(V, rows, iterations, summed):
             ut = u[:, 1:] + rows.w_tn[s] * P[:, :1]
             lt_old = lam[s, 1:]
             lt = lt_old - np.einsum("kij,kj->ki", rows.wtt_inv[s], ut)
-            lt = friction.cap(lt, ln, rows.mu_s[s], rows.mu_k[s])
+            lt = friction.cap(lt, ln, rows.mu[s], rows.sliding[s], ut)
             P[:, 1:] = lt - lt_old
             lam[s, 0] = ln
             lam[s, 1:] = lt
             _apply(V, rows, s, P, ab, VAB, summed)
+            if tolerance > 0.0:
+                change = max(change, float((np.abs(P).max(axis=1) * w_nn[s]).max()))
+        if change < tolerance:
+            return sweep + 1
+    return iterations
 
 
 def solve_normal_targets(V, rows, target, active, iterations, summed):

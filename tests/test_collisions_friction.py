@@ -1,0 +1,129 @@
+"""Friction at contacts against closed forms (COURSE.md 2 and 5).
+
+A box on an incline of angle α stays put while tan α < μ_s and otherwise
+slides with a = g (sin α − μ_k cos α); a sphere launched sliding with no
+spin is slowed by kinetic friction and spun up until it rolls, at 5/7 of
+its launch speed (solid sphere, I = 2/5 m r²).
+"""
+import math
+
+import numpy as np
+import pytest
+
+from physics_core import load_scene
+
+pytestmark = pytest.mark.filterwarnings("ignore:.*fallback")
+G = 9.81
+HALF = (0.2, 0.15, 0.05)      # a low box: it slides rather than tips
+
+
+def incline_scene(alpha, ground, block, substeps=1):
+    """Plane through the origin tilted by α about y (downhill is +x), the box
+    lying flat on it, at rest."""
+    n = np.array([math.sin(alpha), 0.0, math.cos(alpha)])
+    q = [math.cos(alpha / 2), 0.0, math.sin(alpha / 2), 0.0]     # body z axis along n
+    return {"dt": 1.0 / 240.0, "substeps": substeps, "gravity": [0, 0, -G],
+            "effects": {"contacts": {"sleep": False}},
+            "bodies": [
+                {"name": "slope", "shape": {"type": "plane", "normal": n.tolist()}, "material": ground},
+                {"name": "box", "shape": {"type": "box", "half_extents": list(HALF)}, "mass": 2.0,
+                 "material": block, "restitution": 0.0, "position": (n * HALF[2]).tolist(),
+                 "orientation": q}]}
+
+
+# (ground, block, μ_s, μ_k) from the course's table (COURSE.md 2)
+PAIRS = [("steel", "steel", 0.6, 0.4), ("concrete", "rubber", 1.0, 0.9),
+         ("steel", "teflon", 0.041, 0.04), ("glass", "glass", 0.94, 0.40)]
+
+
+@pytest.mark.parametrize("ground, block, mu_s, mu_k", PAIRS, ids=[f"{a}-{b}" for a, b, _, _ in PAIRS])
+def test_box_stays_on_an_incline_below_the_friction_angle(ground, block, mu_s, mu_k):
+    alpha = 0.8 * math.atan(mu_s)
+    w = load_scene(incline_scene(alpha, ground, block))
+    p0 = w.body("box").position.copy()
+    w.step(240)
+    assert np.linalg.norm(w.body("box").position - p0) < 1e-3
+    assert np.linalg.norm(w.body("box").velocity) < 1e-3
+
+
+@pytest.mark.parametrize("ground, block, mu_s, mu_k", PAIRS, ids=[f"{a}-{b}" for a, b, _, _ in PAIRS])
+def test_box_slides_down_a_steeper_incline_at_the_kinetic_rate(ground, block, mu_s, mu_k):
+    alpha = math.atan(mu_s) + math.radians(10.0)
+    w = load_scene(incline_scene(alpha, ground, block))
+    down = np.array([math.cos(alpha), 0.0, -math.sin(alpha)])
+    w.step(24)                                   # past the first contact transient
+    t0, v0 = w.time, w.body("box").velocity @ down
+    w.step(96)
+    a = (w.body("box").velocity @ down - v0) / (w.time - t0)
+    assert a == pytest.approx(G * (math.sin(alpha) - mu_k * math.cos(alpha)), rel=0.01)
+    # it slides flat: no lift-off from the slope, no tumbling
+    n = np.array([math.sin(alpha), 0.0, math.cos(alpha)])
+    assert abs(w.body("box").velocity @ n) < 1e-3
+    assert np.linalg.norm(w.body("box").angular_velocity) < 1e-2
+
+
+def test_sliding_sphere_starts_rolling_at_five_sevenths_of_its_speed():
+    r, v0, mu_k = 0.1, 2.0, 0.4
+    w = load_scene({"dt": 1.0 / 240.0, "gravity": [0, 0, -G], "effects": {"contacts": {"sleep": False}},
+                    "bodies": [{"name": "floor", "shape": {"type": "plane"}, "material": "steel"},
+                               {"name": "ball", "shape": {"type": "sphere", "radius": r}, "mass": 1.0,
+                                "material": "steel", "restitution": 0.0, "position": [0, 0, r],
+                                "velocity": [v0, 0, 0]}]})
+    # sliding lasts t = 2 v0 / (7 μ_k g) ≈ 0.15 s
+    w.step(120)
+    b = w.body("ball")
+    assert b.velocity[0] == pytest.approx(5.0 / 7.0 * v0, rel=2e-3)
+    # rolls: v = ω r (to the resting overlap g h² of the contact, 2e-4 of r)
+    assert b.angular_velocity[1] * r == pytest.approx(b.velocity[0], rel=1e-3)
+    assert abs(b.velocity[1]) < 1e-12 and abs(b.velocity[2]) < 1e-6
+
+
+def test_sliding_sphere_decelerates_at_mu_k_g_while_it_slides():
+    r, v0, mu_k = 0.1, 2.0, 0.4
+    w = load_scene({"dt": 1.0 / 240.0, "gravity": [0, 0, -G], "effects": {"contacts": {"sleep": False}},
+                    "bodies": [{"name": "floor", "shape": {"type": "plane"}, "material": "steel"},
+                               {"name": "ball", "shape": {"type": "sphere", "radius": r}, "mass": 1.0,
+                                "material": "steel", "restitution": 0.0, "position": [0, 0, r],
+                                "velocity": [v0, 0, 0]}]})
+    w.step(12)
+    v1, t1 = w.body("ball").velocity[0], w.time
+    w.step(12)
+    assert (v1 - w.body("ball").velocity[0]) / (w.time - t1) == pytest.approx(mu_k * G, rel=1e-6)
+
+
+def test_head_on_hit_has_no_tangent_and_no_sideways_impulse():
+    """v_rel ∥ n: the course's tangent (n × v) × n is 0/0; friction is zero, not NaN."""
+    w = load_scene({"dt": 1.0 / 240.0, "effects": {"contacts": {}}, "bodies": [
+        {"name": "a", "shape": {"type": "sphere", "radius": 0.1}, "mass": 1.0, "material": "rubber",
+         "position": [-0.3, 0, 0], "velocity": [3.0, 0, 0]},
+        {"name": "b", "shape": {"type": "sphere", "radius": 0.1}, "mass": 1.0, "material": "rubber",
+         "position": [0.3, 0, 0]}]})
+    events = []
+    for _ in range(60):
+        w.step()
+        if len(w.contacts):
+            events.append(w.contacts)
+    assert events
+    assert all(np.all(np.isfinite(e.friction_impulse)) and np.all(e.friction_impulse == 0.0) for e in events)
+    assert np.all(w.state.vel[:, 1:] == 0.0) and np.all(w.state.omega == 0.0)
+
+
+def test_friction_impulse_opposes_sliding_in_any_direction():
+    """The kinetic impulse points against the sliding velocity whatever its
+    direction in the tangent plane (the tangent basis is only a basis)."""
+    for ang in np.linspace(0.0, 2 * np.pi, 7)[:-1]:
+        d = np.array([np.cos(ang), np.sin(ang), 0.0])
+        w = load_scene({"dt": 1.0 / 240.0, "gravity": [0, 0, -G], "effects": {"contacts": {"sleep": False}},
+                        "bodies": [{"name": "floor", "shape": {"type": "plane"}, "material": "steel"},
+                                   {"name": "box", "shape": {"type": "box", "half_extents": [0.2, 0.2, 0.05]},
+                                    "mass": 1.0, "material": "steel", "restitution": 0.0,
+                                    "position": [0, 0, 0.05], "velocity": (2.0 * d).tolist()}]})
+        w.step(6)                  # a new contact is held by μ_s for its first substep
+        v1, t1 = w.body("box").velocity.copy(), w.time
+        w.step(18)
+        v = w.body("box").velocity
+        dv = v - v1
+        assert np.linalg.norm(np.cross(dv, v)) < 1e-3 * np.linalg.norm(dv) * np.linalg.norm(v)
+        assert dv @ v < 0.0                                             # against the sliding
+        assert np.linalg.norm(dv) / (w.time - t1) == pytest.approx(0.4 * G, rel=1e-6)
+        assert np.linalg.norm(np.cross(v, d)) < 1e-2 * np.linalg.norm(v)   # still about along d
