@@ -47,6 +47,7 @@ class World:
         self.last_step_seconds = 0.0
         self._prof = {}   # the current step's timings; forces() may also be called between steps
         self._force_effects = build_force_effects(model)
+        self._timed_effects = [("force:" + name, apply) for name, apply in self._force_effects]
         self.spring_substeps = stable_substeps(model, model.dt)
         self.substeps = max(model.substeps, self.spring_substeps)
         self._integrate = INTEGRATORS[model.integrator]
@@ -118,10 +119,9 @@ class World:
         T = np.zeros_like(pos)
         kin = Kinematics(pos, quat, vel, omega)
         prof = self._prof
-        for name, apply in self._force_effects:
+        for key, apply in self._timed_effects:
             t0 = perf_counter()
             apply(kin, F, T)
-            key = "force:" + name
             prof[key] = prof.get(key, 0.0) + perf_counter() - t0
         s = self.state
         if s.has_user_force:
