@@ -307,7 +307,7 @@ def test_message_class_and_type_name_are_inverse():
         assert message_class(type_name(cls)) is cls
 
 
-def test_reusing_builders_give_the_same_bytes_as_fresh_messages():
+def test_reusing_builders_give_the_same_messages_as_fresh_ones():
     from msg_adapters import BodyOdometry, SceneMarkers, odometries
 
     rng = np.random.default_rng(3)
@@ -317,9 +317,7 @@ def test_reusing_builders_give_the_same_bytes_as_fresh_messages():
         quat = rng.normal(size=(3, 4))
         quat /= np.linalg.norm(quat, axis=1, keepdims=True)
         contacts = _contacts(stamp // 10)
-        assert serialize_message(markers.build(pos, quat, contacts, stamp)) == serialize_message(
-            scene_markers(_Model, pos, quat, contacts, stamp)
-        )
-        fresh = odometries(_Model.names, pos, quat, vel, omega, stamp)
-        reused = odom.build(pos, quat, vel, omega, stamp)
-        assert [serialize_message(m) for m in reused] == [serialize_message(m) for m in fresh]
+        # Compared as messages: CDR alignment padding is not guaranteed to be
+        # zeroed, so equal messages need not serialize to equal bytes.
+        assert markers.build(pos, quat, contacts, stamp) == scene_markers(_Model, pos, quat, contacts, stamp)
+        assert odom.build(pos, quat, vel, omega, stamp) == odometries(_Model.names, pos, quat, vel, omega, stamp)
