@@ -307,6 +307,22 @@ def test_submerged_sphere_sinks_with_reduced_gravity():
     assert world.body("stone").position[2] == pytest.approx(-5.0 - 0.5 * a, abs=1e-9)
 
 
+def test_tilted_box_under_water_feels_rho_g_V_and_no_torque():
+    """Wholly submerged, a box's buoyancy is ρ_f g V at its centre whatever its
+    orientation: a = g (1 − ρ_f/ρ_b) straight down and it does not start turning
+    (Verlet, 1e-9 m; ω exactly 0). A box above the water feels nothing."""
+    q = axis_angle([1.0, 1.0, 0.0], 0.6)
+    world = load_scene(scene(box("sunk", density=3000.0, position=(0, 0, -3.0), orientation=q),
+                             box("dry", density=3000.0, position=(5, 0, 10.0), orientation=q),
+                             gravity="earth", integrator="velocity_verlet",
+                             effects={"buoyancy": {"fluid_density": 1000.0}}))
+    world.step(240)
+    g = g_of("earth")
+    assert world.body("sunk").position == pytest.approx([0.0, 0.0, -3.0 - 0.5 * g * (1 - 1 / 3.0)], abs=1e-9)
+    assert np.abs(world.body("sunk").angular_velocity).max() < 1e-12
+    assert world.body("dry").position[2] == pytest.approx(10.0 - 0.5 * g, abs=1e-9)
+
+
 def test_tilted_floating_box_rights_itself():
     """A raft wider than it is tall has its metacentre above its centre of mass
     (GM = KB + BM − KG = 0.03 + 1/(12·0.06) − 0.1 ≈ 1.3 m), so a tilt produces a
