@@ -26,7 +26,7 @@ def build_parser():
         description="Rigid-body physics node for ROS 2: forces and impulses in, poses and contacts out.",
         epilog="ROS arguments go after --ros-args, e.g. --ros-args -p publish_every:=4",
     )
-    p.add_argument("--scene", help="scene YAML file (default: the built-in scene)")
+    p.add_argument("--scene", metavar="FILE", help="scene YAML file (default: the built-in scene)")
     p.add_argument("--record", metavar="FILE.mcap", help="record the session to this MCAP file")
     p.add_argument("--duration", type=float, metavar="S", help="sim seconds to run, then exit (0 = until stopped)")
     p.add_argument("--rtf", type=float, metavar="X", help="real-time factor (0 = as fast as possible)")
@@ -55,7 +55,8 @@ def how_to_push(node):
         f"{python} -c \"import rclpy, time; from geometry_msgs.msg import WrenchStamped as W; rclpy.init(); "
         f"n = rclpy.create_node('pusher'); p = n.create_publisher(W, '{ns}/{body}/impulse', 10); "
         f"m = W(); m.header.frame_id = 'world'; m.wrench.force.x = 2.0; m.wrench.force.z = 3.0; "
-        f"time.sleep(1.0); p.publish(m); time.sleep(0.5)\""
+        f"[time.sleep(0.1) for _ in range(100) if p.get_subscription_count() == 0]; "
+        f"p.publish(m); time.sleep(0.5)\""
     )
     lines = [
         f"physics: {len(node.model.names)} bodies ({', '.join(node.model.names)}) from {node.scene_path}",

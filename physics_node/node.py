@@ -47,6 +47,8 @@ NODE_NAME = "physics"
 # executor deliver commands and service calls.
 TICK_BUDGET_S = 0.02
 DROP_WARNING_PERIOD_S = 2.0
+# How often the graph is searched for command topics of bodies the scene lacks.
+UNKNOWN_BODY_SCAN_S = 0.5
 
 
 class PhysicsNode(Node):
@@ -107,7 +109,7 @@ class PhysicsNode(Node):
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         self._tick = self.create_timer(self.pacer.tick_period(), self._on_tick, clock=steady)
         self.create_timer(1.0, self._on_diagnostics, clock=steady)
-        self.create_timer(1.0, self._scan_for_unknown_bodies, clock=steady)
+        self.create_timer(UNKNOWN_BODY_SCAN_S, self._scan_for_unknown_bodies, clock=steady)
 
         t0 = sim_time_ns(self.world.time)
         self.outputs.send_bodies(self.world, t0, self.world.step_index)

@@ -288,6 +288,23 @@ def test_push_and_follow_example_moves_the_body(sim):
     assert "+0.0000, +0.0000, +1.0000" not in lines[-1], "the ball should have moved along x"
 
 
+def test_the_printed_one_liner_pushes_the_ball(sim):
+    import subprocess
+
+    from test_node_support import REPO, node_env
+
+    node, driver = sim
+    fresh(driver)
+    log = node.log()
+    assert "ros2 topic pub --once /physics/ball/impulse" in log
+    one_liner = next(line.strip() for line in log.splitlines() if '-c "import rclpy' in line)
+    subprocess.run(one_liner, shell=True, cwd=REPO, env=node_env(), check=True, timeout=30)
+    driver.spin_for(0.2)
+    step(driver, 1)
+    odom = latest(driver, "/physics/ball/odom", FREE_DT_NS)
+    assert state_from_odometry(odom)[2] == pytest.approx([2.0 / BALL_MASS, 0, 3.0 / BALL_MASS], abs=1e-12)
+
+
 def test_sigterm_stops_the_node_cleanly(tmp_path):
     scene = tmp_path / "free.yaml"
     scene.write_text(FREE_SCENE)
