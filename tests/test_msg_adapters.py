@@ -83,7 +83,7 @@ def test_sim_time_rounds_to_the_nearest_nanosecond():
 # -- poses and odometry ----------------------------------------------------------
 
 
-@settings(max_examples=50)
+@settings(max_examples=50, deadline=None)  # the first call loads the type support
 @given(arrays(np.float64, (3, 3), elements=finite), arrays(np.float64, (3, 4), elements=finite))
 def test_pose_array_keeps_every_bit(pos, quat):
     msg = deserialize_message(serialize_message(pose_array(pos, quat, 123)), PoseArray)
@@ -109,6 +109,7 @@ def test_odometry_twist_is_in_the_body_frame():
     assert msg.twist.twist.angular.z == pytest.approx(0.5)
 
 
+@settings(deadline=None)
 @given(unit_quaternions(), vec3, vec3, vec3)
 def test_odometry_round_trip(q, p, v, w):
     pos, quat, vel, omega = state_from_odometry(odometry("b", p, q, v, w, 0))
