@@ -16,9 +16,9 @@ Three measurements, each a row of `run()`:
 Timing follows `timeit`: a run is cut into chunks and the fastest chunk is
 kept (load on the machine only ever adds time); its per-stage profile is the
 one reported. Chunks are timed in process CPU time, so time the process spends
-descheduled by other load does not count; the per-stage figures come from
-`world.profile` (wall clock) and are best read as shares. Scenes compared
-with each other are timed in interleaved rounds. This is a benchmark, not a
+descheduled by other load does not count; the per-stage figures are
+`world.profile`'s (wall-clock) shares of that chunk, scaled to its CPU time.
+Scenes compared with each other are timed in interleaved rounds. This is a benchmark, not a
 test: nothing here asserts.
 """
 import argparse
@@ -103,11 +103,14 @@ def time_worlds(worlds, chunks=10, chunk_seconds=0.005):
     for _ in range(chunks):
         for i, (world, size) in enumerate(zip(worlds, sizes)):
             before = dict(world.profile)
-            t0 = process_time()
+            c0, w0 = process_time(), perf_counter()
             world.step(size)
-            elapsed = (process_time() - t0) / size
+            cpu, wall = process_time() - c0, perf_counter() - w0
+            elapsed = cpu / size
             if best[i] is None or elapsed < best[i][0]:
-                stages = {k: (world.profile[k] - before.get(k, 0.0)) / size for k in world.profile}
+                # the profile is wall clock: keep its shares of the step, scaled to the CPU time
+                scale = cpu / wall / size if wall > 0 else 0.0
+                stages = {k: (world.profile[k] - before.get(k, 0.0)) * scale for k in world.profile}
                 best[i] = (elapsed, stages)
     return best
 
