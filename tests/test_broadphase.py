@@ -76,7 +76,7 @@ def brute_candidates(model, pos, quat, margin):
 
 @settings(max_examples=200, deadline=None)
 @given(seed=st.integers(0, 2 ** 32 - 1), n=st.integers(0, 60), spread=st.floats(0.1, 20.0),
-       big=st.floats(0.0, 0.3), spheres=st.booleans())
+       big=st.floats(0.0, 0.7), spheres=st.booleans())
 def test_overlapping_pairs_match_brute_force(seed, n, spread, big, spheres):
     rng = np.random.default_rng(seed)
     centre = rng.uniform(-spread, spread, (n, 3))

@@ -11,9 +11,10 @@ bodies or pairs:
   have centres in the same or adjacent cells; each cell is compared with
   itself and its 13 "forward" neighbours, which reports every pair once;
 - the other bodies (a long static slab, a fast body's swept box) are
-  "large": each is swept along the axis where the centres spread most,
-  against the small bodies sorted by their lower bound on that axis
-  (sort-and-sweep), and against the other large bodies directly;
+  "large": they are swept along the axis where the boxes spread most
+  (sort-and-sweep), against the small bodies and against each other;
+- candidates are expanded and tested in blocks of GRID_BLOCK bodies, so the
+  work arrays stay small;
 - candidate_pairs then keeps pairs whose bounding spheres also overlap and
   sorts them by (min, max) index, so the whole step stays deterministic.
 
@@ -167,24 +168,33 @@ def _grid_pairs(small, cols, cell):
     return body.take(np.concatenate(ps)), body.take(np.concatenate(qs))
 
 
+def _expand(start, stop):
+    """Flattened index ranges [start_k, stop_k): (owner k of each, index)."""
+    count = np.maximum(stop - start, 0)
+    total = int(count.sum())
+    owner = np.repeat(np.arange(len(start)), count)
+    return owner, np.repeat(start - (np.cumsum(count) - count), count) + np.arange(total)
+
+
 def _large_pairs(big, small, cols, cell):
-    """Large bodies: swept along the axis where centres spread most against
-    the small bodies (a small body's lower bound lies within `cell` below
-    any point it covers), and compared directly with each other."""
+    """Large bodies, by sort-and-sweep along the axis where the boxes spread
+    most: against the small bodies sorted by their lower bound (a small body
+    overlapping [lo, hi] starts in [lo - cell, hi]), and against each other
+    (j after i in lower-bound order overlaps i on that axis iff lo_j <= hi_i)."""
     axis = int(np.argmax(np.var(cols[_LO] + cols[_HI], axis=1)))
+    lo_big, hi_big = cols[axis].take(big), cols[3 + axis].take(big)
     sweep = cols[axis].take(small)
     order = np.argsort(sweep, kind="stable")
     sweep, sorted_small = sweep[order], small[order]
-    start = np.searchsorted(sweep, cols[axis].take(big) - cell, side="left")
-    end = np.searchsorted(sweep, cols[3 + axis].take(big), side="right")
-    count = end - start
-    total = int(count.sum())
-    q = np.repeat(start - (np.cumsum(count) - count), count) + np.arange(total)
-    i, j = np.repeat(big, count), sorted_small.take(q)
-    # large against large: the (L, L) upper triangle
-    bi, bj = np.triu_indices(len(big), k=1)
-    i = np.concatenate([i, big[bi]])
-    j = np.concatenate([j, big[bj]])
+    owner, q = _expand(np.searchsorted(sweep, lo_big - cell, side="left"),
+                       np.searchsorted(sweep, hi_big, side="right"))
+    i, j = big.take(owner), sorted_small.take(q)
+    order = np.argsort(lo_big, kind="stable")
+    sorted_big, lo_sorted = big[order], lo_big[order]
+    owner, q = _expand(np.arange(1, len(big) + 1),
+                       np.searchsorted(lo_sorted, hi_big[order], side="right"))
+    i = np.concatenate([i, sorted_big.take(owner)])
+    j = np.concatenate([j, sorted_big.take(q)])
     return _filter(cols, i, j)
 
 
