@@ -1,6 +1,7 @@
 """Broad phase: the pairs of bodies whose bounding boxes overlap.
 
-A uniform grid hashes every axis-aligned bounding box (AABB) by the cell of
+The first, cheap half of detecting a collision (COURSE.md 5): it proposes
+every pair that may touch, and the narrow phase decides. A uniform grid hashes every axis-aligned bounding box (AABB) by the cell of
 its centre; only bodies in the same or neighbouring cells are compared, so
 the cost follows the number of bodies and of near neighbours instead of n².
 Everything is numpy sorts, searchsorted and index arithmetic, no loop over
