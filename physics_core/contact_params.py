@@ -19,7 +19,7 @@ class ContactParams:
     velocity_tolerance: float = 1e-4     # m/s; sweeps stop early once none changes a contact's
                                          # relative velocity by more than this (0: always all sweeps)
     warm_start: float = 1.0              # fraction of last substep's impulses applied first, 0..1
-    static_friction_speed: float = 1e-3  # m/s; a contact slipping slower than this is held by static
+    static_friction_speed: float = 0.01  # m/s; a contact slipping slower than this is held by static
                                          # friction (μ_s), faster it slides with μ_k (COURSE.md 5)
     margin: float = 0.005                # m; pairs closer than this are kept as (speculative) contacts
     # -- restitution (COURSE.md 5, coefficient of restitution, resting contact) --

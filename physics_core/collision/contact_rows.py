@@ -48,6 +48,7 @@ class ContactRows:
     bias: np.ndarray       # (k,) least normal velocity the solve must reach, m/s
     lam: np.ndarray        # (k, 3) accumulated impulses of the rows, N·s
     bounds: np.ndarray     # batch boundaries (rows are sorted by batch)
+    split: np.ndarray      # (k, 2) mass-splitting factors of the two bodies (1 without)
 
     def __len__(self):
         return len(self.a)
@@ -166,4 +167,5 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
     return ContactRows(a=a, b=b, key=m.key, point=m.point, normal=n, tangent=D[:, 1:, :],
                        depth=m.depth, ab=ab, J=J, M=M, mass_n=mass_n, w_tn=w_tn,
                        wtt_inv=wtt_inv, mu_s=mu_s, mu_k=mu_k, mu=mu_k.copy(), sliding=np.ones(k, bool), e=e, u0=u0, bias=bias,
-                       lam=np.zeros((k, 3)), bounds=np.array([0, k]))
+                       lam=np.zeros((k, 3)), bounds=np.array([0, k]),
+                       split=np.ones((k, 2)) if split is None else np.stack([split[a], split[b]], 1).astype(float))

@@ -182,9 +182,10 @@ class ContactPipeline:
         target = np.minimum(p.correction_rate * (-sep - p.slop) / h, p.max_correction_speed)
         dX = dV
         if p.position_iterations and (target > 0.0).any():
-            Vp = np.zeros_like(V)
-            solver.solve_pseudo(Vp, rows, np.maximum(target, 0.0), p.position_iterations, self.summed)
-            dX = dV + Vp
+            Xp = np.zeros((len(V), 3))
+            solver.solve_pseudo(Xp, rows, np.maximum(target, 0.0), p.position_iterations, self.summed)
+            dX = dV.copy()
+            dX[:, :3] += Xp
         s.pos += dX[:, :3] * h
         turn = np.flatnonzero(dX[:, 3:].any(axis=1))
         if len(turn):

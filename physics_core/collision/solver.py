@@ -114,23 +114,30 @@ def solve_normal_targets(V, rows, target, active, iterations, summed):
             _apply(V, rows, g, P, ab, VAB, summed)
 
 
-def solve_pseudo(Vp, rows, target, iterations, summed):
-    """Pseudo-velocities (split impulse): normal rows pushed to `target`, starting
-    from zero. They move positions and are then thrown away, so pushing bodies
-    apart adds no kinetic energy."""
+def solve_pseudo(Xp, rows, target, iterations, summed):
+    """Pseudo-velocities (split impulse): normal rows pushed apart to `target`,
+    starting from zero. They move positions and are then thrown away, so
+    pushing bodies apart adds no kinetic energy. Only translation: a push-out
+    that also turned the bodies would tilt a box out of the floor (and lift it)
+    whenever the sweep order makes one corner's push larger than another's.
+    Xp (n, 3) is the pseudo-velocity of the centres."""
     slices = _slices(rows)
     lam = np.zeros(len(rows))
-    Jn, Mn = rows.J[:, 0, :], rows.M[:, 0, :]
+    n = rows.normal
+    ima = -np.einsum("ki,ki->k", rows.M[:, 0, 0:3], n)     # 1/m_a (0 static or asleep)
+    imb = np.einsum("ki,ki->k", rows.M[:, 0, 6:9], n)
+    mass = 1.0 / np.maximum(ima * rows.split[:, 0] + imb * rows.split[:, 1], 1e-300)
     for _ in range(iterations):
         for s in slices:
             ab = rows.ab[s]
-            VAB = Vp[ab].reshape(len(ab), 12)
-            un = np.einsum("ki,ki->k", Jn[s], VAB)
+            XAB = Xp[ab]                                       # (k, 2, 3)
+            un = np.einsum("ki,ki->k", XAB[:, 1] - XAB[:, 0], n[s])
             l_old = lam[s]
-            l_new = np.maximum(l_old - rows.mass_n[s] * (un - target[s]), 0.0)
-            d = (l_new - l_old)[:, None] * Mn[s]
+            l_new = np.maximum(l_old - mass[s] * (un - target[s]), 0.0)
+            d = (l_new - l_old)[:, None] * n[s]
             lam[s] = l_new
+            step = np.stack([-ima[s, None] * d, imb[s, None] * d], axis=1)
             if summed:
-                np.add.at(Vp, ab.reshape(-1), d.reshape(-1, 6))
+                np.add.at(Xp, ab.reshape(-1), step.reshape(-1, 3))
             else:
-                Vp[ab] = (VAB + d).reshape(-1, 2, 6)
+                Xp[ab] = XAB + step
