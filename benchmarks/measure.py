@@ -1,5 +1,9 @@
 """Steps/s and peak memory of one engine on one scene, each in a fresh process.
 
+Steps/s is the mean over the timed run: a contact scene's work changes as
+it settles, so no single chunk stands for it (the fastest chunk is kept too,
+as `fastest_steps_per_second`).
+
 A fresh process per measurement keeps one engine's caches and allocations
 out of another's numbers, and lets the peak resident memory (ru_maxrss) be
 read for that run alone (VmHWM). Run as
@@ -14,6 +18,7 @@ import sys
 from time import perf_counter
 
 WARMUP = 5          # steps before timing: first contacts, caches, lazy set-up
+HEARTBEAT = 15.0    # s between progress lines of a long measurement
 
 
 def _rss_mb():
@@ -42,8 +47,19 @@ def measure_here(scene_module, scene_function, n, engine, steps):
     build = perf_counter() - t0
     step(WARMUP)
     before = stages() or {}
-    t0 = perf_counter()
-    step(steps)
+    t0 = last = perf_counter()
+    chunk = max(1, steps // 20)
+    best = float("inf")       # fastest chunk, per step
+    for done in range(0, steps, chunk):
+        k = min(chunk, steps - done)
+        c0 = perf_counter()
+        step(k)
+        best = min(best, (perf_counter() - c0) / k)
+        if perf_counter() - last > HEARTBEAT:
+            last = perf_counter()
+            sys.stderr.write(f"    {engine}, {len(bodies)} bodies: {done + chunk}/{steps} steps "
+                             f"({last - t0:.0f} s)\n")
+            sys.stderr.flush()
     elapsed = perf_counter() - t0
     pos = positions()
     after = stages()
@@ -53,6 +69,7 @@ def measure_here(scene_module, scene_function, n, engine, steps):
     peak = _peak_mb()
     return {"engine": engine, "bodies": len(bodies), "steps": steps, "seconds": elapsed,
             "steps_per_second": steps / elapsed, "body_steps_per_second": len(bodies) * steps / elapsed,
+            "fastest_steps_per_second": 1.0 / best,
             "build_seconds": build, "peak_rss_mb": peak, "baseline_rss_mb": base,
             "scene_mb": max(0.0, peak - base), "min_z": float(pos[:, 2].min()) if len(pos) else 0.0,
             "stage_seconds_per_step": profile}
@@ -65,13 +82,16 @@ def measure(scene_module, scene_function, n, engine, steps, timeout=1800):
     cmd = [sys.executable, "-m", "benchmarks.measure", scene_module, scene_function, str(n), engine,
            str(steps)]
     try:
-        out = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env)
+        # stderr passes through: the child's progress lines and any traceback show as they come
+        out = subprocess.run(cmd, stdout=subprocess.PIPE, text=True, timeout=timeout, env=env)
     except subprocess.TimeoutExpired:
         return {"engine": engine, "error": f"timed out after {timeout} s"}
     if out.returncode != 0:
-        last = (out.stderr.strip().splitlines() or ["no output"])[-1]
-        return {"engine": engine, "error": last[:300]}
-    return json.loads(out.stdout.strip().splitlines()[-1])
+        return {"engine": engine, "error": f"exit status {out.returncode} (traceback above)"}
+    lines = [ln for ln in out.stdout.splitlines() if ln.startswith("{")]
+    if not lines:
+        return {"engine": engine, "error": "no result printed"}
+    return json.loads(lines[-1])
 
 
 if __name__ == "__main__":

@@ -69,15 +69,47 @@ def pyramid_study(quick):
     return rows
 
 
+PILE_SIZES = {True: (1, 10, 100, 1000), False: (1, 10, 100, 1000, 10000)}
+
+
 def pile_study(quick):
-    """The sphere-pile comparison of benchmarks/pile_compare.py, as its own rows."""
+    """The sphere-pile comparison of benchmarks/pile_compare.py: its rows and stage profiles."""
     try:
         pile_compare = importlib.import_module("benchmarks.pile_compare")
     except ImportError as e:
         Progress("scale", 1).note(f"sphere piles skipped: benchmarks/pile_compare.py not available ({e})")
         return {"skipped": f"benchmarks/pile_compare.py not available ({e})"}
-    rows = pile_compare.run(quick=quick)
-    return {"rows": rows}
+    note = Progress("scale piles", 1).note
+    rows = pile_compare.run(sizes=PILE_SIZES[quick], quick=quick, log=lambda m: note(m.strip()))
+    profiles = {str(k): v for k, v in getattr(pile_compare.run, "profiles", {}).items()}
+    about = next((para for para in (pile_compare.__doc__ or "").split("\n\n")
+                  if "scene" in para), "")
+    return {"rows": rows, "profiles": profiles, "about": about}
+
+
+def pile_ratios(rows):
+    """[(spheres, {engine: how many times faster than this engine})] from pile_compare's rows."""
+    def rate(row, engine):
+        try:
+            return float(str(row.get(f"{engine} steps/s", "")).split("*")[0].split()[0])
+        except (ValueError, IndexError):
+            return None
+    out = []
+    for r in rows:
+        ours = rate(r, "physics_core")
+        out.append((r.get("spheres"), {e: rate(r, e) / ours for e in ("pybullet", "mujoco")
+                                       if ours and rate(r, e)}))
+    return out
+
+
+def pile_tables(piles):
+    """pile_compare's own Markdown for its rows and profiles."""
+    from . import pile_compare
+    out = [pile_compare.markdown(piles["rows"]) + "\n"]
+    if piles.get("profiles"):
+        out += ["\nWhere this engine's step time goes (sphere piles):\n\n",
+                pile_compare.profile_markdown(piles["profiles"]) + "\n"]
+    return "".join(out)
 
 
 def by_size(rows):
@@ -161,11 +193,17 @@ def report(data):
               "\n### Where this engine's step time goes (box pyramid)\n",
               stage_table(data["pyramid"])]
     piles = data.get("piles") or {}
-    parts.append("\n## Sphere piles\n")
+    parts.append("\n## Sphere piles (benchmarks/pile_compare.py)\n")
     if "skipped" in piles:
         parts.append(f"_Skipped: {piles['skipped']}._\n")
     else:
-        parts.append(generic_table(piles.get("rows") or []))
+        parts.append(" ".join(piles.get("about", "").split()) + " The `this / …` columns are "
+                     "this engine's steps/s over the other's (below 1: this engine is slower).\n")
+        parts.append(pile_tables(piles))
+        parts.append("\nHow many times faster than this engine:\n")
+        parts.append(md.table(["spheres", "PyBullet", "MuJoCo"],
+                              [[n, _ratio_text(x.get("pybullet")), _ratio_text(x.get("mujoco"))]
+                               for n, x in pile_ratios(piles["rows"])], align="rrr"))
     return "\n".join(parts)
 
 

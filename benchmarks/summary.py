@@ -274,8 +274,10 @@ def _scale(out, prefix, level):
     if "skipped" in piles:
         lines.append(f"\nSphere piles: _skipped, {piles['skipped']}._\n")
     elif piles.get("rows"):
-        from .scale import generic_table
-        lines += ["\nSphere piles (benchmarks/pile_compare.py):\n", generic_table(piles["rows"])]
+        from .scale import pile_tables
+        lines += [f"\n**Sphere piles** (spheres dropped in columns that topple into a pile, the "
+                  "first second; `this / …` is this engine's steps/s over the other's):\n",
+                  pile_tables(piles), _pile_behind(piles["rows"])]
     return "\n".join(lines)
 
 
@@ -288,7 +290,7 @@ def _behind(data, by_size, ratio):
         for other, label in (("pybullet", "PyBullet"), ("mujoco", "MuJoCo")):
             x = ratio(ours, per.get(other))
             if x is not None:
-                cells.append(f"{label} {x:.2g}×" if x >= 1 else f"{label} {x:.2g}× (this engine ahead)")
+                cells.append(f"{label} {x:.3g}×" if x >= 1 else f"this engine {1 / x:.3g}× faster than {label}")
         if cells:
             parts.append(f"{n}: " + ", ".join(cells))
     ours = sorted((r for r in data["pyramid"] if r.get("engine") == "physics_core" and "error" not in r),
@@ -315,6 +317,19 @@ def _behind(data, by_size, ratio):
                "overhead is spread over more rows.")
     return ("Where this engine is behind (times faster than this engine, per number of "
             "bodies): " + "; ".join(parts) + "." + why)
+
+
+def _pile_behind(rows):
+    from .scale import pile_ratios
+    parts = []
+    for n, ratios in pile_ratios(rows):
+        cells = [f"{label} {ratios[e]:.3g}×" if ratios[e] >= 1 else
+                 f"this engine {1 / ratios[e]:.3g}× faster than {label}"
+                 for e, label in (("pybullet", "PyBullet"), ("mujoco", "MuJoCo")) if e in ratios]
+        if cells:
+            parts.append(f"{n}: " + ", ".join(cells))
+    return ("\nPiles, times faster than this engine per number of spheres: " + "; ".join(parts)
+            + ".\n") if parts else ""
 
 
 # ---- effects --------------------------------------------------------------------------
