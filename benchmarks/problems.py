@@ -199,8 +199,8 @@ TOP = Problem(
     time_scale=FREE_TOP.period, horizon=(1.3 * FREE_TOP.period, 2.3 * FREE_TOP.period),
     quick={"explicit_euler": (512, 4096), "semi_implicit_euler": (512, 4096),
            "velocity_verlet": (512, 4096), "rk4": (16, 256)},
-    full={"explicit_euler": (256, 16384), "semi_implicit_euler": (256, 16384),
-          "velocity_verlet": (256, 16384), "rk4": (8, 512)},
+    full={"explicit_euler": (256, 16384), "semi_implicit_euler": (128, 4096),
+          "velocity_verlet": (128, 4096), "rk4": (8, 512)},
     build=_top_build, error=_top_error)
 
 
