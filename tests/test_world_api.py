@@ -115,6 +115,9 @@ def test_impulse_is_applied_once_at_the_next_step():
     assert world.body("ball").velocity == pytest.approx([2.0, 1.0, 0.0], abs=1e-15)
     world.step(100)
     assert world.body("ball").velocity == pytest.approx([2.0, 1.0, 0.0], abs=1e-15)
+    world.apply_impulse("ball", [0.0, 0.0, 0.25])      # a later impulse brings only itself
+    world.step()
+    assert world.body("ball").velocity == pytest.approx([2.0, 1.0, 0.5], abs=1e-15)
 
 
 def test_angular_impulse_is_applied_once():
