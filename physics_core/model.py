@@ -43,7 +43,11 @@ class BuoyancyParams:
 
 @dataclass(frozen=True)
 class SpringSet:
-    """Hooke springs with dampers; body index -1 means the world (COURSE.md 2)."""
+    """Hooke springs with dampers; body index -1 means the world (COURSE.md 2).
+
+    A stiff spring makes the World take more sub-steps than the scene asks for,
+    so that ω h ≤ 0.5 with ω = √(K/m_eff) (World.spring_substeps,
+    effects/springs.stable_substeps)."""
     a: np.ndarray
     b: np.ndarray
     point_a: np.ndarray      # attachment in a's body frame (world frame if a == -1)
