@@ -13,28 +13,61 @@ colour and the others try again next round. The lowest uncoloured index
 always wins, so it terminates; the result depends only on the input order,
 so it is deterministic. Colours are bits of a uint64 per body; contacts of a
 body with more than 64 contacts go to a second tier of 64 colours, and so on.
+
+From one substep to the next most contacts persist: they keep last
+substep's colour (where it still clashes with nothing) and only the new
+ones are coloured, first-fit around them.
 """
 import numpy as np
 
 WORD = 64
 
 
-def color_contacts(u: np.ndarray, w: np.ndarray, n_bodies: int) -> np.ndarray:
-    """Colour (k,) int64 for contacts between bodies u and w (-1: no conflict)."""
+def color_contacts(u: np.ndarray, w: np.ndarray, n_bodies: int, prior=None) -> np.ndarray:
+    """Colour (k,) int64 for contacts between bodies u and w (-1: no conflict).
+    `prior` (k,): a colour to keep per contact where it still fits (-1: none)."""
     k = len(u)
     colour = np.full(k, -1, dtype=np.int64)
-    todo = np.arange(k)
+    used = np.zeros(n_bodies + 1, dtype=np.uint64)   # last row: the "no body" sentinel, stays 0
+    if prior is not None:
+        _keep_prior(u, w, prior, colour, used)
+    todo = np.flatnonzero(colour < 0)
     tier = 0
     best = np.full(n_bodies * WORD, k, dtype=np.int64)   # lowest claimant per (body, colour)
     while len(todo):
-        deferred = _color_tier(u, w, todo, colour, best, n_bodies, tier * WORD)
-        todo = deferred
+        if tier:
+            used = np.zeros(n_bodies + 1, dtype=np.uint64)
+        todo = _color_tier(u, w, todo, colour, best, used, tier * WORD)
         tier += 1
     return colour
 
 
-def _color_tier(u, w, todo, colour, best, n_bodies, offset):
-    used = np.zeros(n_bodies + 1, dtype=np.uint64)   # last row: the "no body" sentinel, stays 0
+def _keep_prior(u, w, prior, colour, used):
+    """Give contacts their prior colour (first tier only) unless two of them
+    would share a colour at a body; mark the colours used."""
+    idx = np.flatnonzero((prior >= 0) & (prior < WORD))
+    if not len(idx):
+        return
+    c = prior[idx]
+    ends = np.concatenate([u[idx], w[idx]])
+    owner = np.concatenate([idx, idx])
+    cc = np.concatenate([c, c])
+    real = ends >= 0
+    ends, owner, cc = ends[real], owner[real], cc[real]
+    key = ends * WORD + cc
+    order = np.lexsort((owner, key))
+    key, owner = key[order], owner[order]
+    clash = np.zeros(len(prior), bool)
+    clash[owner[1:][key[1:] == key[:-1]]] = True       # the later contact of a clashing pair
+    ok = idx[~clash[idx]]
+    colour[ok] = prior[ok]
+    bit = np.left_shift(np.uint64(1), prior[ok].astype(np.uint64))
+    uo, wo = u[ok], w[ok]
+    np.bitwise_or.at(used, uo[uo >= 0], bit[uo >= 0])
+    np.bitwise_or.at(used, wo[wo >= 0], bit[wo >= 0])
+
+
+def _color_tier(u, w, todo, colour, best, used, offset):
     one = np.uint64(1)
     deferred = []
     while len(todo):

@@ -38,7 +38,11 @@ class ContactRows:
     M: np.ndarray          # (k, 3, 12) (M_A⁻¹ J_Aᵀ | M_B⁻¹ J_Bᵀ) as rows: Δ(V_a, V_b) per unit impulse
     mass_n: np.ndarray     # (k,) 1 / W_nn, the normal's effective mass, kg
     w_tn: np.ndarray       # (k, 2) W_tn: tangential velocity change per unit normal impulse
-    wtt_inv: np.ndarray    # (k, 2, 2) inverse of the tangent block
+    wtt: np.ndarray        # (k, 2, 2) the tangent block W_tt
+    wtt_inv: np.ndarray    # (k, 2, 2) its inverse
+    Js: np.ndarray         # (k, 3, 12) rows scaled for the solver: (m_n J_n, W_tt⁻¹ J_t)
+    mass_bias: np.ndarray  # (k,) m_n · bias
+    g_tn: np.ndarray       # (k, 2) W_tt⁻¹ W_tn
     mu_s: np.ndarray       # (k,)
     mu_k: np.ndarray
     mu: np.ndarray         # (k,) the one in use this substep (friction.coefficient_in_use)
@@ -92,14 +96,6 @@ def _cross_rows(r, D):
     return out
 
 
-def _angular_rows(J_ang, bodies, inv_inertia_w, iso_inv):
-    """Rows of I_w⁻¹ (r × d) for the bodies of each contact: a scalar product for
-    bodies with equal principal moments (spheres, cubes), a 3×3 product otherwise."""
-    if inv_inertia_w is None:
-        return J_ang * iso_inv[bodies][:, None, None]
-    return J_ang @ inv_inertia_w[bodies]          # I_w⁻¹ is symmetric
-
-
 def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=None, rewound=None):
     """Rows for manifold `m` (already in batch order) at positions `pos`.
 
@@ -116,16 +112,18 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
     D = np.stack([n, t1, t2], axis=1)                      # (k, 3 rows, 3)
     rA = m.point - pos[a]
     rB = m.point - pos[b]
-    J = np.empty((k, 3, 12))
-    J[:, :, 0:3] = -D
-    J[:, :, 3:6] = -_cross_rows(rA, D)
-    J[:, :, 6:9] = D
-    J[:, :, 9:12] = _cross_rows(rB, D)
-    M = np.empty((k, 3, 12))
-    M[:, :, 0:3] = J[:, :, 0:3] * inv_mass[a][:, None, None]
-    M[:, :, 3:6] = _angular_rows(J[:, :, 3:6], a, inv_inertia_w, iso_inv)
-    M[:, :, 6:9] = J[:, :, 6:9] * inv_mass[b][:, None, None]
-    M[:, :, 9:12] = _angular_rows(J[:, :, 9:12], b, inv_inertia_w, iso_inv)
+    J = np.concatenate([-D, -_cross_rows(rA, D), D, _cross_rows(rB, D)], axis=2)
+    # M = M⁻¹ Jᵀ as rows: inverse masses scale the linear columns; the angular
+    # ones take I_w⁻¹, a scalar for isotropic bodies, a 3×3 product otherwise
+    inv_a = np.where(np.isfinite(inv_mass[a]), inv_mass[a], 0.0)
+    inv_b = np.where(np.isfinite(inv_mass[b]), inv_mass[b], 0.0)
+    if inv_inertia_w is None:
+        scale = np.repeat(np.stack([inv_a, iso_inv[a], inv_b, iso_inv[b]], axis=1), 3, axis=1)
+        M = J * scale[:, None, :]
+    else:
+        M = np.concatenate([J[:, :, 0:3] * inv_a[:, None, None], J[:, :, 3:6] @ inv_inertia_w[a],
+                            J[:, :, 6:9] * inv_b[:, None, None], J[:, :, 9:12] @ inv_inertia_w[b]],
+                           axis=2)                  # I_w⁻¹ is symmetric
     # each body's part of the normal's inverse effective mass (the course's
     # denominator is their sum); they also weight the two restitutions
     k_a = np.einsum("ki,ki->k", J[:, 0, :6], M[:, 0, :6])
@@ -148,6 +146,12 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
     wtt_inv[:, 1, 1] = W[:, 1, 1] * inv_det
     wtt_inv[:, 0, 1] = -W[:, 1, 2] * inv_det
     wtt_inv[:, 1, 0] = -W[:, 2, 1] * inv_det
+    Js = np.empty_like(J)
+    Js[:, 0, :] = J[:, 0, :] * mass_n[:, None]
+    J1, J2 = J[:, 1, :], J[:, 2, :]
+    Js[:, 1, :] = wtt_inv[:, 0, 0, None] * J1 + wtt_inv[:, 0, 1, None] * J2
+    Js[:, 2, :] = wtt_inv[:, 1, 0, None] * J1 + wtt_inv[:, 1, 1, None] * J2
+    g_tn = np.einsum("kij,kj->ki", wtt_inv, w_tn)
     mu_s, mu_k = friction.coefficients(model, a, b)
     e = restitution.pair_restitution(model, a, b, k_a, k_b, params.restitution_combine)
     ab = np.stack([a, b], axis=1)
@@ -166,6 +170,6 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
     bias = -np.maximum(s0, 0.0) / h
     return ContactRows(a=a, b=b, key=m.key, point=m.point, normal=n, tangent=D[:, 1:, :],
                        depth=m.depth, ab=ab, J=J, M=M, mass_n=mass_n, w_tn=w_tn,
-                       wtt_inv=wtt_inv, mu_s=mu_s, mu_k=mu_k, mu=mu_k.copy(), sliding=np.ones(k, bool), e=e, u0=u0, bias=bias,
+                       wtt=W[:, 1:, 1:].copy(), wtt_inv=wtt_inv, Js=Js, mass_bias=mass_n * bias, g_tn=g_tn, mu_s=mu_s, mu_k=mu_k, mu=mu_k.copy(), sliding=np.ones(k, bool), e=e, u0=u0, bias=bias,
                        lam=np.zeros((k, 3)), bounds=np.array([0, k]),
                        split=np.ones((k, 2)) if split is None else np.stack([split[a], split[b]], 1).astype(float))

@@ -22,7 +22,12 @@ whenever there is sliding, and zero when there is none.
 """
 import numpy as np
 
-_TINY = 1e-30
+try:        # the C entry point of np.einsum, without the Python dispatch layer
+    from numpy._core.multiarray import c_einsum as _einsum
+except ImportError:     # pragma: no cover - other numpy layouts
+    _einsum = np.einsum
+
+_TINY = 1e-300
 
 
 def coefficients(model, a, b):
@@ -32,16 +37,21 @@ def coefficients(model, a, b):
 
 
 def tangent_basis(normal):
-    """(t1, t2), each (k, 3): t1 ⟂ n from the world axis least aligned with n
-    (x unless n is close to x, then y), t2 = n × t1. Deterministic, never NaN
-    for a unit n."""
-    helper = np.zeros_like(normal)
-    use_y = np.abs(normal[:, 0]) > 0.57735
-    helper[~use_y, 0] = 1.0
-    helper[use_y, 1] = 1.0
-    t1 = helper - normal * np.einsum("ij,ij->i", helper, normal)[:, None]
-    t1 /= np.sqrt(np.einsum("ij,ij->i", t1, t1))[:, None]
-    t2 = np.cross(normal, t1)
+    """(t1, t2), each (k, 3): an orthonormal basis of the plane ⟂ n, from n
+    alone (Duff et al. 2017, "Building an orthonormal basis, revisited":
+    branch-free, continuous except across n_z = 0, never NaN for a unit n)."""
+    nx, ny, nz = normal[:, 0], normal[:, 1], normal[:, 2]
+    sign = np.copysign(1.0, nz)
+    a = -1.0 / (sign + nz)
+    b = nx * ny * a
+    t1 = np.empty_like(normal)
+    t2 = np.empty_like(normal)
+    t1[:, 0] = 1.0 + sign * nx * nx * a
+    t1[:, 1] = sign * b
+    t1[:, 2] = -sign * nx
+    t2[:, 0] = b
+    t2[:, 1] = sign + ny * ny * a
+    t2[:, 2] = -ny
     return t1, t2
 
 
@@ -49,22 +59,17 @@ def cap(lam_t, lam_n, mu, sliding, slip_velocity):
     """The accumulated tangential impulse (k, 2) allowed by Coulomb's law,
     |λ_t| ≤ μ λ_n. A larger one is brought back onto the cone: for a contact
     that is sliding (`sliding`, kinetic friction) it becomes μ_k λ_n against
-    the slip velocity (k, 2), the course's kinetic impulse μ_k j along −t with
-    t the unit tangential relative velocity; for a sticking contact it keeps
-    the direction of the impulse that would stop it (the static bound)."""
-    mag2 = np.einsum("ij,ij->i", lam_t, lam_t)
+    the slip velocity, the course's kinetic impulse μ_k j along −t with t the
+    unit tangential relative velocity; for a sticking contact it keeps the
+    direction of the impulse that would stop it (the static bound).
+    `slip_velocity()` gives the (k, 2) slip velocities, or None when no row
+    is sliding; it is only called when some row is over its bound."""
+    mag2 = _einsum("ij,ij->i", lam_t, lam_t)
     lim = mu * lam_n
     over = mag2 > lim * lim
     if not over.any():
         return lam_t
-    out = lam_t.copy()
-    o = np.flatnonzero(over)
-    mag = np.sqrt(mag2[o])
-    direction = lam_t[o] / mag[:, None]
-    v = slip_velocity[o]
-    speed = np.sqrt(np.einsum("ij,ij->i", v, v))
-    against = sliding[o] & (speed > _TINY)
-    if against.any():
-        direction[against] = -v[against] / speed[against, None]
-    out[o] = lim[o, None] * direction
-    return out
+    v = slip_velocity()
+    direction = lam_t if v is None else np.where(sliding[:, None], -v, lam_t)
+    scale = lim / np.sqrt(_einsum("ij,ij->i", direction, direction) + _TINY)
+    return np.where(over[:, None], direction * scale[:, None], lam_t)

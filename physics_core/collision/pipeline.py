@@ -28,6 +28,8 @@ class ContactScratch:
         self.colour_key = None    # colouring cache: keys and awake set it was made for
         self.colour_awake = None
         self.colour = None
+        self.colour_of = None     # (k,) colour of each contact of colour_key
+        self.fresh_colours = 0    # colours of the last colouring from scratch
 
 
 class ContactPipeline:
@@ -117,8 +119,21 @@ class ContactPipeline:
             return sc.colour
         u = np.where(moving[m.a], m.a, -1)
         w = np.where(moving[m.b], m.b, -1)
-        sc.colour = batches(color_contacts(u, w, self.model.n))
-        sc.colour_key, sc.colour_awake = m.key, moving
+        prior = None
+        if sc.colour is not None and len(sc.colour_key):
+            i = np.minimum(np.searchsorted(sc.colour_key, m.key), len(sc.colour_key) - 1)
+            prior = np.where(sc.colour_key[i] == m.key, sc.colour_of[i], -1)
+        colour = color_contacts(u, w, self.model.n, prior)
+        order, bounds = batches(colour)
+        if prior is not None and len(bounds) - 1 > sc.fresh_colours + 1:
+            # kept colours have fragmented: start afresh (fewer batches per sweep)
+            prior = None
+            colour = color_contacts(u, w, self.model.n)
+            order, bounds = batches(colour)
+        if prior is None:
+            sc.fresh_colours = len(bounds) - 1
+        sc.colour = order, bounds
+        sc.colour_key, sc.colour_awake, sc.colour_of = m.key, moving, colour
         return sc.colour
 
     # ---- solve -------------------------------------------------------------

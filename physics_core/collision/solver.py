@@ -15,29 +15,20 @@ summed, and each body's inverse mass in the effective masses was multiplied
 by its number of contacts (mass splitting, Tonge et al. 2012), which keeps
 the summed update from overshooting.
 
-V is the (n, 6) array of body (v, ω); only rows in the batch are touched.
+V is the (n, 6) C-ordered array of body (v, ω); a batch reads and writes
+its bodies' 12 numbers through flat indices (take / put), the cheapest
+gather and scatter numpy has. Rows carry their Jacobian pre-multiplied by the
+effective masses (contact_rows.ContactRows.Js), so one product gives the
+impulse each row asks for.
 """
 import numpy as np
 
 from . import friction
 
-
-def _gather(V, rows, s):
-    """(k, 12) velocities of the two bodies of rows s, and the row velocities (k, 3)."""
-    ab = rows.ab[s]
-    VAB = V[ab].reshape(len(ab), 12)
-    return ab, VAB, np.einsum("kri,ki->kr", rows.J[s], VAB)
-
-
-def _apply(V, rows, s, P, ab, VAB, summed):
-    """Add M⁻¹Jᵀ P to the two bodies of rows s."""
-    d = np.einsum("kr,kri->ki", P, rows.M[s])
-    if summed:
-        np.add.at(V, ab.reshape(-1), d.reshape(-1, 6))
-    else:
-        # a batch shares no moving body; a static or sleeping one may repeat,
-        # and gets back its own (zero) velocity
-        V[ab] = (VAB + d).reshape(-1, 2, 6)
+try:        # the C entry point of np.einsum, without the Python dispatch layer
+    from numpy._core.multiarray import c_einsum as _einsum
+except ImportError:     # pragma: no cover - other numpy layouts
+    _einsum = np.einsum
 
 
 def _slices(rows):
@@ -45,48 +36,65 @@ def _slices(rows):
     return [slice(int(bd[i]), int(bd[i + 1])) for i in range(len(bd) - 1)]
 
 
+def flat_index(ab, width):
+    """(k, 2·width) indices of the two bodies' `width` numbers in a flat (n·width,) array."""
+    return (ab[:, :, None] * width + np.arange(width)).reshape(len(ab), 2 * width)
+
+
+def _scatter(Vf, idx, new, delta, summed):
+    if summed:
+        np.add.at(Vf, idx, delta)
+    else:
+        # a batch shares no moving body; a static or sleeping one may repeat,
+        # and gets back its own (zero) velocity
+        Vf[idx] = new
+
+
 def tangential_slip(V, rows):
     """(k,) speed of sliding at each contact, |v_t|, with the velocities V."""
-    u = np.einsum("kri,ki->kr", rows.J[:, 1:, :], V[rows.ab].reshape(len(rows), 12))
-    return np.sqrt(np.einsum("ij,ij->i", u, u))
+    u = _einsum("kri,ki->kr", rows.J[:, 1:, :], V.reshape(-1).take(flat_index(rows.ab, 6)))
+    return np.sqrt(_einsum("ij,ij->i", u, u))
 
 
 def warm_start(V, rows, summed):
     """Apply the accumulated impulses λ the rows start with."""
     if not len(rows) or not rows.lam.any():
         return
-    d = np.einsum("kr,kri->ki", rows.lam, rows.M)
-    np.add.at(V, rows.ab.reshape(-1), d.reshape(-1, 6))
+    d = _einsum("kr,kri->ki", rows.lam, rows.M)
+    np.add.at(V.reshape(-1), flat_index(rows.ab, 6), d)
 
 
 def solve_velocities(V, rows, iterations, summed, tolerance=0.0):
     """Normal (non-penetration, target rows.bias) and friction rows, at most
-    `iterations` sweeps; stops after a sweep in which no impulse change moved
-    a contact's relative velocity by more than `tolerance` (m/s).
+    `iterations` sweeps; stops after a sweep that changed no impulse by more
+    than what moves a contact's relative velocity by `tolerance` (m/s).
     Returns the number of sweeps done."""
-    slices = _slices(rows)
+    Vf = V.reshape(-1)
+    views = []
+    for s in _slices(rows):
+        views.append((flat_index(rows.ab[s], 6), rows.Js[s], rows.M[s], rows.mass_bias[s],
+                      rows.g_tn[s], rows.mu[s], rows.sliding[s], rows.lam[s], rows.wtt[s], rows.w_tn[s],
+                      bool(rows.sliding[s].any())))
     lam = rows.lam
-    w_nn = 1.0 / rows.mass_n
+    # an impulse change dλ moves a row's relative velocity by about dλ / m_eff
+    limit = tolerance * float(rows.mass_n.min()) if tolerance > 0.0 and len(rows) else -1.0
     for sweep in range(iterations):
-        change = 0.0
-        for s in slices:
-            ab, VAB, u = _gather(V, rows, s)
-            ln_old = lam[s, 0]
-            ln = np.maximum(ln_old - rows.mass_n[s] * (u[:, 0] - rows.bias[s]), 0.0)
-            P = np.empty((len(ln), 3))
-            P[:, 0] = ln - ln_old
+        before = lam.copy() if limit > 0.0 else None
+        for idx, Js, M, mass_bias, g_tn, mu, sliding, lam_s, wtt, w_tn, any_sliding in views:
+            VAB = Vf.take(idx)
+            us = _einsum("kri,ki->kr", Js, VAB)      # (m_n u_n, W_tt⁻¹ u_t)
+            old = lam_s.copy()
+            ln = np.maximum(old[:, 0] - us[:, 0] + mass_bias, 0.0)
+            dn = ln - old[:, 0]
             # friction sees the velocity after this normal change (W_tn couples them)
-            ut = u[:, 1:] + rows.w_tn[s] * P[:, :1]
-            lt_old = lam[s, 1:]
-            lt = lt_old - np.einsum("kij,kj->ki", rows.wtt_inv[s], ut)
-            lt = friction.cap(lt, ln, rows.mu[s], rows.sliding[s], ut)
-            P[:, 1:] = lt - lt_old
-            lam[s, 0] = ln
-            lam[s, 1:] = lt
-            _apply(V, rows, s, P, ab, VAB, summed)
-            if tolerance > 0.0:
-                change = max(change, float((np.abs(P).max(axis=1) * w_nn[s]).max()))
-        if change < tolerance:
+            lt = old[:, 1:] - us[:, 1:] - g_tn * dn[:, None]
+            lam_s[:, 0] = ln
+            lam_s[:, 1:] = friction.cap(
+                lt, ln, mu, sliding,
+                lambda: (_einsum("kij,kj->ki", wtt, us[:, 1:]) + w_tn * dn[:, None]) if any_sliding else None)
+            d = _einsum("kr,kri->ki", lam_s - old, M)
+            _scatter(Vf, idx, VAB + d, d, summed)
+        if before is not None and float(np.abs(lam - before).max()) < limit:
             return sweep + 1
     return iterations
 
@@ -102,16 +110,18 @@ def solve_normal_targets(V, rows, target, active, iterations, summed):
     bd = rows.bounds
     groups = np.split(idx_all, np.searchsorted(idx_all, bd[1:-1]))
     groups = [g for g in groups if len(g)]
+    Vf = V.reshape(-1)
     lam = rows.lam
     for _ in range(iterations):
         for g in groups:
-            ab, VAB, u = _gather(V, rows, g)
+            idx = flat_index(rows.ab[g], 6)
+            VAB = Vf.take(idx)
+            un = _einsum("ki,ki->k", rows.J[g, 0, :], VAB)
             ln_old = lam[g, 0]
-            ln = np.maximum(ln_old - rows.mass_n[g] * (u[:, 0] - target[g]), 0.0)
-            P = np.zeros((len(g), 3))
-            P[:, 0] = ln - ln_old
+            ln = np.maximum(ln_old - rows.mass_n[g] * (un - target[g]), 0.0)
             lam[g, 0] = ln
-            _apply(V, rows, g, P, ab, VAB, summed)
+            d = (ln - ln_old)[:, None] * rows.M[g, 0, :]
+            _scatter(Vf, idx, VAB + d, d, summed)
 
 
 def solve_pseudo(Xp, rows, target, iterations, summed):
@@ -120,24 +130,33 @@ def solve_pseudo(Xp, rows, target, iterations, summed):
     pushing bodies apart adds no kinetic energy. Only translation: a push-out
     that also turned the bodies would tilt a box out of the floor (and lift it)
     whenever the sweep order makes one corner's push larger than another's.
-    Xp (n, 3) is the pseudo-velocity of the centres."""
-    slices = _slices(rows)
-    lam = np.zeros(len(rows))
+    Xp (n, 3) is the pseudo-velocity of the centres.
+
+    Only rows of bodies that some row must push take part (with every other
+    row of those bodies, so a push does not drive them into a neighbour)."""
+    push = target > 0.0
+    bodies = np.zeros(len(Xp), bool)
+    bodies[rows.a[push]] = True
+    bodies[rows.b[push]] = True
+    sel = np.flatnonzero(bodies[rows.a] | bodies[rows.b])
+    bd = rows.bounds
+    groups = [g for g in np.split(sel, np.searchsorted(sel, bd[1:-1])) if len(g)]
     n = rows.normal
-    ima = -np.einsum("ki,ki->k", rows.M[:, 0, 0:3], n)     # 1/m_a (0 static or asleep)
-    imb = np.einsum("ki,ki->k", rows.M[:, 0, 6:9], n)
+    ima = -_einsum("ki,ki->k", rows.M[:, 0, 0:3], n)     # 1/m_a (0 static or asleep)
+    imb = _einsum("ki,ki->k", rows.M[:, 0, 6:9], n)
     mass = 1.0 / np.maximum(ima * rows.split[:, 0] + imb * rows.split[:, 1], 1e-300)
+    # per row: the pseudo-velocity change of (a, b) per unit push, and the
+    # normal as a (6,) row giving n·(x_b − x_a)
+    step = np.concatenate([-ima[:, None] * n, imb[:, None] * n], axis=1)
+    jn = np.concatenate([-n, n], axis=1)
+    Xf = Xp.reshape(-1)
+    views = [(flat_index(rows.ab[g], 3), jn[g], step[g], mass[g], target[g]) for g in groups]
+    lam = [np.zeros(len(g)) for g in groups]
     for _ in range(iterations):
-        for s in slices:
-            ab = rows.ab[s]
-            XAB = Xp[ab]                                       # (k, 2, 3)
-            un = np.einsum("ki,ki->k", XAB[:, 1] - XAB[:, 0], n[s])
-            l_old = lam[s]
-            l_new = np.maximum(l_old - mass[s] * (un - target[s]), 0.0)
-            d = (l_new - l_old)[:, None] * n[s]
-            lam[s] = l_new
-            step = np.stack([-ima[s, None] * d, imb[s, None] * d], axis=1)
-            if summed:
-                np.add.at(Xp, ab.reshape(-1), step.reshape(-1, 3))
-            else:
-                Xp[ab] = XAB + step
+        for (idx, j, st, m, tg), l_old in zip(views, lam):
+            XAB = Xf.take(idx)
+            un = _einsum("ki,ki->k", j, XAB)
+            l_new = np.maximum(l_old - m * (un - tg), 0.0)
+            d = (l_new - l_old)[:, None] * st
+            l_old[:] = l_new
+            _scatter(Xf, idx, XAB + d, d, summed)

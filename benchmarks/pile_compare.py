@@ -1,0 +1,137 @@
+"""Sphere piles in this engine, PyBullet and MuJoCo, in one process: steps per second.
+
+    python -m benchmarks.pile_compare [--sizes 100 1000 10000] [--steps 240] [--budget 120] [--quick]
+
+The scene: N spheres of radius 0.1 m and 1 kg on a grid of columns 0.25 m
+apart, ten layers high (fewer below 100 spheres), the lowest 5 cm above a
+ground plane, each shifted by up to 1 cm sideways (fixed seed) so the
+columns topple; dropped under gravity, dt = 1/240 s. Every engine gets the
+same bodies and step through benchmarks/engines.py: 8 solver iterations,
+sleeping off. Each engine runs the same number of steps from the same start
+(the first second: the fall, the impacts and the pile forming), timed by
+wall clock around the stepping only. An engine that has not finished its
+steps within `--budget` seconds stops there and is reported over the steps
+it did (marked `*`: an early part of the run, the fall, is cheaper than the
+pile). PyBullet and MuJoCo are optional: a missing one is a column of
+"not installed".
+
+Prints a Markdown table with steps/s and the ratios, then where this
+engine's step time goes (world.profile, per stage).
+"""
+import argparse
+import importlib.util
+import warnings
+from time import perf_counter
+
+import numpy as np
+
+from . import engines
+
+SIZES = (100, 1000, 10000)
+STEPS = 240
+QUICK_STEPS = 60
+BUDGET = 120.0          # s of stepping per engine and size, at most
+RADIUS = 0.1
+SPACING = 0.25
+LAYERS = 10
+JITTER = 0.01
+SEED = 0
+OTHERS = ("pybullet", "mujoco")
+
+
+def pile(n, radius=RADIUS, spacing=SPACING, layers=LAYERS, seed=SEED):
+    """[(shape, size, position)] for benchmarks.engines: n spheres in columns."""
+    side = max(1, int(np.ceil(np.sqrt(n / layers)))) if n >= 10 * layers else max(1, int(np.ceil(n ** (1 / 3))))
+    i = np.arange(n)
+    pos = np.stack([(i % side) * spacing, ((i // side) % side) * spacing,
+                    radius + 0.05 + (i // side ** 2) * spacing], axis=1).astype(float)
+    pos[:, :2] += np.random.default_rng(seed).uniform(-JITTER, JITTER, (n, 2))
+    return [("sphere", radius, p) for p in pos]
+
+
+def installed(engine):
+    return engine == "physics_core" or importlib.util.find_spec(engine) is not None
+
+
+def time_engine(engine, bodies, steps, budget):
+    """(steps done, seconds, stage profile or None)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        step, _, stages = engines.build(engine, bodies)
+    done, t0 = 0, perf_counter()
+    chunk = max(1, steps // 24)
+    while done < steps and perf_counter() - t0 < budget:
+        k = min(chunk, steps - done)
+        step(k)
+        done += k
+    return done, perf_counter() - t0, stages()
+
+
+def run(sizes=SIZES, steps=None, budget=BUDGET, quick=False, log=print):
+    """One row per size: steps/s of each engine and how they compare."""
+    steps = steps or (QUICK_STEPS if quick else STEPS)
+    rows, profiles = [], {}
+    for n in sizes:
+        bodies = pile(n)
+        row = {"spheres": n, "steps": steps}
+        rate = {}
+        for engine in ("physics_core",) + OTHERS:
+            if not installed(engine):
+                row[f"{engine} steps/s"] = "not installed"
+                continue
+            done, seconds, prof = time_engine(engine, bodies, steps, budget)
+            rate[engine] = done / seconds
+            row[f"{engine} steps/s"] = f"{rate[engine]:.3g}" + ("" if done == steps else f"* ({done} steps)")
+            if prof:
+                profiles[n] = {k: v / done for k, v in prof.items()}
+            log(f"  {n} spheres, {engine}: {done} steps in {seconds:.2f} s, {rate[engine]:.3g} steps/s")
+        for engine in OTHERS:
+            if engine in rate and "physics_core" in rate:
+                row[f"this / {engine}"] = f"{rate['physics_core'] / rate[engine]:.2f}"
+            else:
+                row[f"this / {engine}"] = "—"
+        rows.append(row)
+    run.profiles = profiles
+    return rows
+
+
+def markdown(rows):
+    head = list(rows[0])
+    lines = ["| " + " | ".join(head) + " |", "|" + "---:|" * len(head)]
+    lines += ["| " + " | ".join(str(r.get(k, "")) for k in head) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def profile_markdown(profiles):
+    if not profiles:
+        return ""
+    stages = []
+    for p in profiles.values():
+        stages += [k for k in p if k not in stages and k != "step"]
+    head = ["spheres", "step ms"] + stages
+    lines = ["| " + " | ".join(head) + " |", "|" + "---:|" * len(head)]
+    for n, p in profiles.items():
+        total = p.get("step", sum(p.values()))
+        lines.append("| " + " | ".join([str(n), f"{1e3 * total:.2f}"]
+                                       + [f"{100 * p.get(k, 0.0) / total:.0f}%" for k in stages]) + " |")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--sizes", type=int, nargs="+", default=list(SIZES))
+    ap.add_argument("--steps", type=int, default=None, help=f"steps per run (default {STEPS}, quick {QUICK_STEPS})")
+    ap.add_argument("--budget", type=float, default=BUDGET, help="seconds of stepping per engine and size, at most")
+    ap.add_argument("--quick", action="store_true")
+    args = ap.parse_args(argv)
+    rows = run(args.sizes, args.steps, args.budget, args.quick)
+    print()
+    print(f"Sphere pile, r = {RADIUS} m, dt = 1/{round(1 / engines.DT)} s, "
+          f"{engines.ITERATIONS} solver iterations, sleeping off; steps/s (higher is faster):\n")
+    print(markdown(rows))
+    print("\nThis engine, share of the step per stage (world.profile):\n")
+    print(profile_markdown(run.profiles))
+
+
+if __name__ == "__main__":
+    main()
