@@ -4,6 +4,7 @@
     physics-bench stability [--quick] [--out DIR]   hard cases, stiff spring, long runs, random scenes
     physics-bench scale     [--quick] [--out DIR]   piles and pyramid beside PyBullet and MuJoCo
     physics-bench effects   [--quick] [--out DIR]   per-effect cost table
+    physics-bench node      [--quick] [--out DIR]   ROS 2 node in real time: step, publish, recording cost
     physics-bench all       [--quick] [--out DIR]   all of the above
 
 Each writes Markdown tables (`*.md`), plots (`*.png`) and raw data (`*.json`)
@@ -18,7 +19,7 @@ from time import perf_counter
 
 from .results_io import DEFAULT_OUT, ensure
 
-STUDIES = ("accuracy", "stability", "scale", "effects")
+STUDIES = ("accuracy", "stability", "scale", "effects", "node")
 
 
 def _run_accuracy(args):
@@ -42,8 +43,18 @@ def _run_effects(args):
     effects_cost.run(quick=args.quick, out=args.out)
 
 
+def _run_node(args):
+    try:
+        from . import node_realtime
+        import rclpy  # noqa: F401
+    except ImportError as e:
+        sys.stderr.write(f"[node] skipped: the ROS 2 client library is not installed ({e})\n")
+        return
+    node_realtime.run(quick=args.quick, out_dir=args.out)
+
+
 RUNNERS = {"accuracy": _run_accuracy, "stability": _run_stability,
-           "scale": _run_scale, "effects": _run_effects}
+           "scale": _run_scale, "effects": _run_effects, "node": _run_node}
 
 
 def parser():
@@ -54,7 +65,9 @@ def parser():
     helps = {"accuracy": "integrators × dt × substeps on closed-form problems; contact accuracy",
              "stability": "stiff spring, 10⁵-step runs, random scenes, contact hard cases",
              "scale": "box pyramid and sphere piles beside PyBullet and MuJoCo",
-             "effects": "cost of each declared effect", "all": "every study, then the summary"}
+             "effects": "cost of each declared effect",
+             "node": "the ROS 2 node in real time: step, publish and recording cost per step",
+             "all": "every study, then the summary"}
     for name in STUDIES + ("all",):
         s = sub.add_parser(name, help=helps[name])
         s.add_argument("--quick", action="store_true",

@@ -1,0 +1,487 @@
+"""Does the ROS 2 node hold real time? Step, publish and recording cost per step.
+
+    physics-bench node [--quick] [--out DIR]
+    python -m benchmarks.node_realtime [--quick] [--out DIR] [--seconds S] [--only NAME ...]
+
+Targets: 100 bodies at 1 kHz (dt = 1 ms) and 1,000 bodies at 240 Hz
+(dt = 1/240 s), real_time_factor 1, every output published every step
+(`publish_every` 1), and recording (`record`) costing under 10 % of the step.
+
+Scenes (generated, written to a temporary YAML file the node loads):
+
+- `contacts`: spheres (r = 0.1 m, 0.25 m apart on a square grid) dropped from
+  up to 2 cm onto a ground plane, then resting on it, with `sleep: false` so
+  every body's ground contact goes through the solver every step and every
+  step publishes one contact event per body (the demanding case);
+- `contacts_sleep`: the same with the engine's default `sleep: true`: the
+  spheres settle within about a second and then sleep, leaving the solver
+  and the contact stream (the usual case for a scene at rest);
+- `free`: the same spheres falling under gravity with no plane and no
+  `contacts` effect, so what is left is the node's own cost.
+
+How it is measured: in this process, the node class `PhysicsNode` spun by a
+`SingleThreadedExecutor` with `spin_once` in a loop, as `physics-node`
+(physics_node/main.py) does, with `real_time_factor` 1; each case runs with
+and without `record`. A separate process subscribes to `~/poses` (raw CDR,
+not deserialized) and counts what arrives, so publishing has a real
+subscriber and the table shows the poses actually delivered. After a warm-up
+(discovery, first steps), the node runs for a fixed wall time (quick 5 s,
+full 20 s). Per step the node's `_advance` (the whole step: commands, engine
+step, `/clock`, poses, odometry, contacts, markers, recording) is timed, and
+inside it the engine step (`Stepper.advance`) and every `Recorder.write`:
+
+- engine = `Stepper.advance` (queued commands, none here, and `world.step`);
+- record = `Recorder.write` calls (MCAP framing, chunking, zstd);
+- publish = the rest of the step: building the messages, serializing them
+  and handing them to the middleware;
+- recording overhead = mean step time with `record` minus without, as a
+  share of the step time with `record` (what recording adds to a step,
+  including the wrapper's own instrumentation).
+
+The real-time factor is sim time advanced over wall time in the measured
+window; the node drops a backlog of more than 0.25 s, so a node that cannot
+keep up shows a factor below 1, not a growing lag. p99 is over the steps of
+the window. This is a benchmark, not a test: nothing here asserts.
+"""
+import argparse
+import gc
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from time import perf_counter
+
+if __package__ in (None, ""):            # run as a script
+    sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+import numpy as np
+import yaml
+
+RADIUS = 0.1            # m
+SPACING = 0.25          # m between sphere centres on the grid
+DROP = 0.02             # m, largest initial gap under a sphere
+RECORD_TARGET = 0.10    # recording under this share of the step time
+QUICK_SECONDS, FULL_SECONDS = 5.0, 20.0
+WARMUP_SECONDS = 1.5
+SETTLE_SIM_SECONDS = 1.5  # `contacts_sleep`: sim time stepped headless first, so the pile is at rest
+LISTENER_READY_S = 20.0
+
+
+@dataclass(frozen=True)
+class Case:
+    name: str
+    bodies: int
+    dt: float
+    scene: str      # contacts | contacts_sleep | free
+
+    @property
+    def rate_hz(self):
+        return 1.0 / self.dt
+
+
+CASES = (
+    Case("100 @ 1 kHz, contacts", 100, 0.001, "contacts"),
+    Case("100 @ 1 kHz, contacts, sleep", 100, 0.001, "contacts_sleep"),
+    Case("100 @ 1 kHz, free", 100, 0.001, "free"),
+    Case("1000 @ 240 Hz, contacts", 1000, 1.0 / 240.0, "contacts"),
+    Case("1000 @ 240 Hz, contacts, sleep", 1000, 1.0 / 240.0, "contacts_sleep"),
+    Case("1000 @ 240 Hz, free", 1000, 1.0 / 240.0, "free"),
+)
+
+
+# ---- scenes -------------------------------------------------------------------
+
+def scene(case, seed=1):
+    """The scene dict of one case: `case.bodies` spheres on a square grid,
+    each up to DROP above the plane (or falling freely with no plane)."""
+    rng = np.random.default_rng(seed)
+    side = int(np.ceil(np.sqrt(case.bodies)))
+    contacts = case.scene != "free"
+    bodies = []
+    if contacts:
+        bodies.append({"name": "ground", "shape": {"type": "plane", "normal": [0, 0, 1], "offset": 0.0},
+                       "material": "concrete"})
+    for i in range(case.bodies):
+        x, y = (i % side) * SPACING, (i // side) * SPACING
+        bodies.append({"name": f"s{i}", "shape": {"type": "sphere", "radius": RADIUS}, "mass": 1.0,
+                       "material": "rubber", "restitution": 0.3,
+                       "position": [x, y, RADIUS + DROP * float(rng.random())]})
+    sc = {"name": f"node_realtime_{case.scene}_{case.bodies}", "dt": case.dt,
+          "integrator": "semi_implicit_euler", "gravity": "earth", "bodies": bodies}
+    if contacts:
+        sc["effects"] = {"contacts": {"sleep": case.scene == "contacts_sleep"}}
+        sc["friction"] = [{"a": "rubber", "b": "rubber", "static": 1.0, "kinetic": 0.8},
+                          {"a": "concrete", "b": "concrete", "static": 0.6, "kinetic": 0.5}]
+    return sc
+
+
+# ---- ROS environment ------------------------------------------------------------
+
+def ros_environment():
+    """Localhost-only discovery and a domain of our own unless the caller set one."""
+    os.environ.setdefault("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
+    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    os.environ.setdefault("ROS_DOMAIN_ID", str(201 + os.getpid() % 30))
+    return dict(os.environ)
+
+
+class Listener:
+    """A subscriber to `topic` in its own process, counting raw messages.
+    Prints `ready` once it matches a publisher and the count when stdin closes."""
+
+    def __init__(self, topic):
+        env = ros_environment()
+        root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+        env["PYTHONPATH"] = os.pathsep.join([root, env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "benchmarks.node_realtime", "--listen", topic],
+            env=env, cwd=root, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+
+    def wait_ready(self, spin, timeout=LISTENER_READY_S):
+        """Spin the node (`spin()`) until the listener has matched it."""
+        import selectors
+        sel = selectors.DefaultSelector()
+        sel.register(self.proc.stdout, selectors.EVENT_READ)
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            spin()
+            if sel.select(timeout=0):
+                line = self.proc.stdout.readline()
+                if line.strip() == "ready":
+                    return True
+                if not line:
+                    return False
+        return False
+
+    def mark(self):
+        """Ask for the count so far (the start of the measured window)."""
+        self.proc.stdin.write("mark\n")
+        self.proc.stdin.flush()
+
+    def finish(self):
+        """(messages since `mark`, seconds between `mark` and now) as the listener saw them."""
+        try:
+            out, _ = self.proc.communicate("", timeout=30)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            out, _ = self.proc.communicate()
+        for line in out.splitlines():
+            if line.startswith("count "):
+                _, n, seconds = line.split()
+                return int(n), float(seconds)
+        return None, None
+
+
+def listen(topic):
+    """The listener process: count messages on `topic` between `mark` on stdin
+    and stdin closing (raw CDR, so its own cost stays small)."""
+    import threading
+
+    import rclpy
+    from geometry_msgs.msg import PoseArray
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+
+    ros_environment()
+    rclpy.init()
+    node = rclpy.create_node("node_realtime_listener")
+    count = [0]
+    node.create_subscription(PoseArray, topic, lambda _raw: count.__setitem__(0, count[0] + 1),
+                             QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE), raw=True)
+    state = {"mark": None, "base": 0, "done": False}
+
+    def read_stdin():
+        for line in sys.stdin:
+            if line.strip() == "mark":
+                state["mark"], state["base"] = time.monotonic(), count[0]
+        state["done"] = True
+
+    threading.Thread(target=read_stdin, daemon=True).start()
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    announced = False
+    while not state["done"]:
+        executor.spin_once(timeout_sec=0.05)
+        if not announced and node.count_publishers(topic) > 0 and count[0] > 0:
+            print("ready", flush=True)
+            announced = True
+    end = time.monotonic()
+    start = state["mark"] if state["mark"] is not None else end
+    print(f"count {count[0] - state['base']} {end - start:.6f}", flush=True)
+    node.destroy_node()
+    rclpy.try_shutdown()
+    return 0
+
+
+# ---- one measurement ----------------------------------------------------------------
+
+class StepProbe:
+    """Times every step of a node: the whole `_advance`, the engine step
+    inside it and the recorder's writes inside it."""
+
+    def __init__(self, node, capacity):
+        self.measuring = False
+        self.n = 0
+        self.loop = np.zeros(capacity)
+        self.engine = np.zeros(capacity)
+        self.record = np.zeros(capacity)
+        self._engine = 0.0
+        self._record = 0.0
+        stepper_advance = node.stepper.advance
+        node_advance = node._advance
+
+        def timed_stepper_advance():
+            t0 = perf_counter()
+            boundary = stepper_advance()
+            self._engine = perf_counter() - t0
+            return boundary
+
+        def timed_node_advance(publish_all=False):
+            self._record = 0.0
+            t0 = perf_counter()
+            node_advance(publish_all)
+            total = perf_counter() - t0
+            if self.measuring and self.n < len(self.loop):
+                i = self.n
+                self.loop[i], self.engine[i], self.record[i] = total, self._engine, self._record
+                self.n += 1
+
+        node.stepper.advance = timed_stepper_advance
+        node._advance = timed_node_advance
+        recorder = node.recorder
+        if recorder is not None:
+            # Every write goes through write_many where the recorder has it.
+            name = "write_many" if hasattr(recorder, "write_many") else "write"
+            write = getattr(recorder, name)
+
+            def timed_write(*args, **kwargs):
+                t0 = perf_counter()
+                write(*args, **kwargs)
+                self._record += perf_counter() - t0
+
+            setattr(recorder, name, timed_write)
+
+    def samples(self):
+        n = self.n
+        return self.loop[:n], self.engine[:n], self.record[:n]
+
+
+def measure(case, record, seconds, workdir, listener=True):
+    """Run the node on `case` for `seconds` of wall time after a warm-up; one row."""
+    ros_environment()
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.parameter import Parameter
+
+    from physics_node.node import PhysicsNode
+
+    tag = f"{case.scene}_{case.bodies}_{'rec' if record else 'norec'}"
+    scene_path = os.path.join(workdir, f"{tag}.yaml")
+    with open(scene_path, "w", encoding="utf-8") as f:
+        yaml.safe_dump(scene(case), f, sort_keys=False)
+    record_path = os.path.join(workdir, f"{tag}.mcap") if record else ""
+
+    # The default context, as physics-node uses: PhysicsNode takes no other.
+    rclpy.init()
+    node = executor = watcher = None
+    try:
+        node = PhysicsNode(parameter_overrides=[
+            Parameter("scene", Parameter.Type.STRING, scene_path),
+            Parameter("real_time_factor", Parameter.Type.DOUBLE, 1.0),
+            Parameter("record", Parameter.Type.STRING, record_path),
+            Parameter("publish_every", Parameter.Type.INTEGER, 1),
+        ])
+        if case.scene == "contacts_sleep":
+            # Let the spheres land and fall asleep before the node runs, so
+            # the window shows the scene at rest whatever rate the node holds.
+            while node.world.time < SETTLE_SIM_SECONDS:
+                node.world.step()
+        capacity = int(1.2 * (seconds + WARMUP_SECONDS) / case.dt) + 1000
+        probe = StepProbe(node, capacity)
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+
+        def spin():
+            executor.spin_once(timeout_sec=0.1)
+
+        ready = None
+        if listener:
+            watcher = Listener(node.get_fully_qualified_name() + "/poses")
+            ready = watcher.wait_ready(spin)
+        end = time.monotonic() + WARMUP_SECONDS
+        while time.monotonic() < end:
+            spin()
+        gc.collect()
+        if watcher is not None:
+            watcher.mark()
+        sim0, step0 = node.world.time, node.world.step_index
+        cpu0, wall0 = time.process_time(), time.monotonic()
+        probe.measuring = True
+        end = wall0 + seconds
+        while time.monotonic() < end:
+            spin()
+        probe.measuring = False
+        wall = time.monotonic() - wall0
+        cpu = time.process_time() - cpu0
+        sim = node.world.time - sim0
+        steps = node.world.step_index - step0
+        contacts_now = len(node.world.contacts)
+        received, listen_s = watcher.finish() if watcher is not None else (None, None)
+        watcher = None
+        messages = node.recorder.message_count if node.recorder is not None else None
+    finally:
+        if watcher is not None:
+            watcher.finish()
+        if node is not None:
+            node.close()
+            node.destroy_node()
+        if executor is not None:
+            executor.shutdown()
+        rclpy.try_shutdown()
+    size = os.path.getsize(record_path) if record else None
+    if record:
+        os.remove(record_path)
+
+    loop, engine, rec = probe.samples()
+    publish = loop - engine - rec
+    ms = 1e3
+
+    def stat(a):
+        return (float(a.mean() * ms), float(np.percentile(a, 99) * ms)) if len(a) else (None, None)
+
+    row = {
+        "case": case.name, "scene": case.scene, "bodies": case.bodies, "dt_ms": case.dt * ms,
+        "rate_hz": case.rate_hz, "record": record, "wall_s": wall, "sim_s": sim, "steps": steps,
+        "rtf": sim / wall, "cpu_share": cpu / wall, "busy_share": float(loop.sum()) / wall,
+        "contacts_at_end": contacts_now,
+    }
+    for name, a in (("step", loop), ("engine", engine), ("publish", publish), ("record", rec)):
+        row[f"{name}_mean_ms"], row[f"{name}_p99_ms"] = stat(a)
+    row["record_share_direct"] = float(rec.sum() / loop.sum()) if record and len(loop) else None
+    row["listener_ready"] = ready
+    row["poses_received_hz"] = received / listen_s if received is not None and listen_s else None
+    row["recording_mb_per_s"] = size / 1e6 / wall if size is not None else None
+    row["recorded_messages"] = messages
+    row["load_average"] = os.getloadavg()[0]
+    return row
+
+
+
+# ---- the study ------------------------------------------------------------------------
+
+def run(quick=False, out_dir=None, seconds=None, only=None, listener=True):
+    """Every case with and without `record`; rows as `measure` returns them.
+    Writes `node_realtime.md` and `node_realtime.json` into `out_dir` if given."""
+    from .progress import Progress
+    from .results_io import machine, write_json, write_text
+
+    seconds = float(seconds or (QUICK_SECONDS if quick else FULL_SECONDS))
+    cases = [c for c in CASES if not only or any(o in (c.name, c.scene) for o in only)]
+    progress = Progress("node", 2 * len(cases))
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="node_realtime_") as workdir:
+        for case in cases:
+            for record in (False, True):
+                row = measure(case, record, seconds, workdir, listener=listener)
+                rows.append(row)
+                progress.step(f"{case.name}{', record' if record else ''}: real-time factor "
+                              f"{row['rtf']:.3f}, step {row['step_mean_ms']:.3f} ms mean "
+                              f"(engine {row['engine_mean_ms']:.3f}, publish {row['publish_mean_ms']:.3f}, "
+                              f"record {row['record_mean_ms']:.3f}) of {row['dt_ms']:.3f} ms")
+    add_overheads(rows)
+    if out_dir:
+        data = {"quick": quick, "seconds": seconds, "machine": machine(), "rows": rows}
+        write_json(out_dir, "node_realtime.json", data)
+        write_text(out_dir, "node_realtime.md", markdown(rows, seconds, machine()))
+    return rows
+
+
+def add_overheads(rows):
+    """Recording overhead of each recorded row against the same case unrecorded."""
+    plain = {r["case"]: r for r in rows if not r["record"]}
+    for r in rows:
+        base = plain.get(r["case"])
+        if r["record"] and base and r["step_mean_ms"]:
+            r["record_overhead_ms"] = r["step_mean_ms"] - base["step_mean_ms"]
+            r["record_overhead_share"] = r["record_overhead_ms"] / r["step_mean_ms"]
+        else:
+            r["record_overhead_ms"] = r["record_overhead_share"] = None
+
+
+def _f(x, digits=3):
+    return "—" if x is None else f"{x:.{digits}f}"
+
+
+def _pct(x):
+    return "—" if x is None else f"{100 * x:.1f} %"
+
+
+def markdown(rows, seconds, machine_line):
+    from .markdown import table
+    header = ["case", "record", "real-time factor", "step mean / p99 (ms)", "engine mean / p99",
+              "publish mean / p99", "record mean / p99", "budget (ms)", "recording overhead",
+              "poses received (Hz)", "CPU"]
+    body = []
+    for r in rows:
+        body.append([
+            r["case"], "yes" if r["record"] else "no", _f(r["rtf"]),
+            f"{_f(r['step_mean_ms'])} / {_f(r['step_p99_ms'])}",
+            f"{_f(r['engine_mean_ms'])} / {_f(r['engine_p99_ms'])}",
+            f"{_f(r['publish_mean_ms'])} / {_f(r['publish_p99_ms'])}",
+            f"{_f(r['record_mean_ms'])} / {_f(r['record_p99_ms'])}" if r["record"] else "—",
+            _f(r["dt_ms"]), _pct(r["record_overhead_share"]) if r["record"] else "—",
+            _f(r["poses_received_hz"], 0), f"{100 * r['cpu_share']:.0f} %",
+        ])
+    lines = ["# Node real time: step, publish and recording cost", "",
+             f"Machine: {machine_line}. Each row: {seconds:g} s of wall time at real_time_factor 1, "
+             "every output published every step, after a warm-up. Regenerate with "
+             "`physics-bench node` (`--quick`: 5 s per row).", "",
+             table(header, body), "", "## Reading", ""]
+    lines += [f"- {line}" for line in reading(rows)]
+    lines += ["", "## Method", "", __doc__.split("\n\n", 2)[2].strip(), ""]
+    return "\n".join(lines)
+
+
+def reading(rows):
+    """One line per case: did it hold real time, and where the step went."""
+    out = []
+    for r in rows:
+        held = r["rtf"] >= 0.99
+        what = "holds real time" if held else f"misses real time: factor {r['rtf']:.2f}"
+        step, budget = r["step_mean_ms"], r["dt_ms"]
+        parts = [f"engine {r['engine_mean_ms'] / step:.0%}", f"publish {r['publish_mean_ms'] / step:.0%}"]
+        if r["record"]:
+            parts.append(f"record {r['record_mean_ms'] / step:.0%}")
+        line = (f"{r['case']}{' with record' if r['record'] else ''}: {what}; the mean step takes "
+                f"{step:.3f} ms of a {budget:.3f} ms budget ({step / budget:.0%}; {', '.join(parts)})")
+        if r["record"] and r["record_overhead_share"] is not None:
+            ok = "under" if r["record_overhead_share"] < RECORD_TARGET else "over"
+            line += (f"; recording adds {r['record_overhead_ms']:.3f} ms, "
+                     f"{r['record_overhead_share']:.1%} of the step ({ok} the 10 % target)")
+        out.append(line + ".")
+    return out
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--quick", action="store_true", help="5 s per row instead of 20 s")
+    p.add_argument("--out", default=None, help="output folder (default: benchmarks/results)")
+    p.add_argument("--seconds", type=float, default=None, help="wall seconds per row")
+    p.add_argument("--only", nargs="+", metavar="CASE", help="case names or scene kinds to run")
+    p.add_argument("--no-listener", action="store_true", help="no subscriber process on ~/poses")
+    p.add_argument("--listen", metavar="TOPIC", help=argparse.SUPPRESS)
+    args = p.parse_args(argv)
+    if args.listen:
+        return listen(args.listen)
+    from .results_io import DEFAULT_OUT
+    run(quick=args.quick, out_dir=os.path.abspath(args.out or DEFAULT_OUT), seconds=args.seconds,
+        only=args.only, listener=not args.no_listener)
+    return 0
+
+
+if __name__ == "__main__":
+    if __package__ in (None, ""):
+        __package__ = "benchmarks"  # noqa: A001  (relative imports when run as a script)
+    sys.exit(main())
