@@ -16,12 +16,14 @@ class ContactParams:
     iterations: int = 8                  # velocity-solver sweeps over all contacts per (sub)step
     solver: str = "gauss_seidel"         # gauss_seidel: graph-coloured batches updated in turn;
                                          # jacobi: one batch with mass splitting (cheaper, softer stacks)
+    tail_fraction: float = 0.1           # the last graph colours holding at most this fraction of the
+                                         # contacts are solved as one Jacobi batch (0: pure Gauss–Seidel)
     velocity_tolerance: float = 1e-4     # m/s; sweeps stop early once none changes a contact's
                                          # relative velocity by more than this (0: always all sweeps)
     warm_start: float = 1.0              # fraction of last substep's impulses applied first, 0..1
     static_friction_speed: float = 0.01  # m/s; a contact slipping slower than this is held by static
                                          # friction (μ_s), faster it slides with μ_k (COURSE.md 5)
-    margin: float = 0.005                # m; pairs closer than this are kept as (speculative) contacts
+    margin: float = 0.001                # m; pairs closer than this are kept as (speculative) contacts
     # -- restitution (COURSE.md 5, coefficient of restitution, resting contact) --
     restitution_threshold: float = 0.5   # m/s; approach speeds below this bounce with C_R = 0
     restitution_ramp: float = 0.0        # m/s; C_R grows linearly from 0 over this band above the
@@ -56,6 +58,7 @@ def parse_contacts(r) -> ContactParams:
     return ContactParams(
         iterations=r.number("iterations", d.iterations, min=1, max=1000, integer=True),
         solver=r.string("solver", d.solver, choices=SOLVERS),
+        tail_fraction=r.number("tail_fraction", d.tail_fraction, min=0.0, max=1.0),
         velocity_tolerance=r.number("velocity_tolerance", d.velocity_tolerance, min=0.0),
         warm_start=r.number("warm_start", d.warm_start, min=0.0, max=1.0),
         static_friction_speed=r.number("static_friction_speed", d.static_friction_speed, min=0.0),

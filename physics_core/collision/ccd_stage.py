@@ -15,6 +15,7 @@ is lost for that body: a small, bounded time error instead of a tunnel.
 import numpy as np
 
 from . import toi
+from .broadphase import bounding_radius
 
 
 def ccd(world, h, params, scratch):
@@ -22,6 +23,13 @@ def ccd(world, h, params, scratch):
     scratch.rewound = None
     moving = ~model.is_static & s.awake
     p0, q0 = world.prev_pos, world.prev_quat
+    # cheap bound first: no point moves further than |Δc| + R θ, θ ≈ |ω| h (taken
+    # twice, as the integrator's ω may differ within the substep)
+    d = s.pos - p0
+    reach = np.sqrt(np.einsum("ij,ij->i", d, d)) + 2.0 * bounding_radius(model) * h * np.sqrt(
+        np.einsum("ij,ij->i", s.omega, s.omega))
+    if not np.count_nonzero(moving & (reach > params.ccd_threshold * toi.smallest_half_size(model))):
+        return
     fast = moving & toi.fast_body_mask(model, p0, s.pos, params.ccd_threshold,
                                        prev_quat=q0, quat=s.quat)
     if not fast.any():

@@ -53,6 +53,7 @@ class ContactRows:
     lam: np.ndarray        # (k, 3) accumulated impulses of the rows, N·s
     bounds: np.ndarray     # batch boundaries (rows are sorted by batch)
     split: np.ndarray      # (k, 2) mass-splitting factors of the two bodies (1 without)
+    summed_from: int = 0   # rows from here on share bodies within their batch (Jacobi, summed)
 
     def __len__(self):
         return len(self.a)
@@ -102,8 +103,8 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
     inv_mass (n,): the solver's inverse masses (zero for static and sleeping
     bodies); inverse inertia either `inv_inertia_w` (n, 3, 3) world tensors or,
     when that is None (every body isotropic), `iso_inv` (n,) scalars. `split`
-    (n,) multiplies each body's inverse mass in the effective masses only
-    (Jacobi mass splitting). The normal row's target `bias` keeps the pair
+    (k, 2) multiplies each row's two inverse masses in the effective masses
+    only (Jacobi mass splitting). The normal row's target `bias` keeps the pair
     from overlapping at the end of the step (speculative contact, see
     collision/__init__)."""
     a, b, n = m.a, m.b, m.normal
@@ -130,8 +131,8 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
     k_b = np.einsum("ki,ki->k", J[:, 0, 6:], M[:, 0, 6:])
     if split is not None:
         Ms = M.copy()
-        Ms[:, :, :6] *= split[a][:, None, None]
-        Ms[:, :, 6:] *= split[b][:, None, None]
+        Ms[:, :, :6] *= split[:, 0, None, None]
+        Ms[:, :, 6:] *= split[:, 1, None, None]
     else:
         Ms = M
     W = np.empty((k, 3, 3))
@@ -172,4 +173,4 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
                        depth=m.depth, ab=ab, J=J, M=M, mass_n=mass_n, w_tn=w_tn,
                        wtt=W[:, 1:, 1:].copy(), wtt_inv=wtt_inv, Js=Js, mass_bias=mass_n * bias, g_tn=g_tn, mu_s=mu_s, mu_k=mu_k, mu=mu_k.copy(), sliding=np.ones(k, bool), e=e, u0=u0, bias=bias,
                        lam=np.zeros((k, 3)), bounds=np.array([0, k]),
-                       split=np.ones((k, 2)) if split is None else np.stack([split[a], split[b]], 1).astype(float))
+                       split=np.ones((k, 2)) if split is None else split, summed_from=k)

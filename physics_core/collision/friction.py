@@ -67,9 +67,11 @@ def cap(lam_t, lam_n, mu, sliding, slip_velocity):
     mag2 = _einsum("ij,ij->i", lam_t, lam_t)
     lim = mu * lam_n
     over = mag2 > lim * lim
-    if not over.any():
+    if not np.count_nonzero(over):
         return lam_t
     v = slip_velocity()
-    direction = lam_t if v is None else np.where(sliding[:, None], -v, lam_t)
-    scale = lim / np.sqrt(_einsum("ij,ij->i", direction, direction) + _TINY)
+    if v is None:
+        return lam_t * np.where(over, lim / np.sqrt(mag2 + _TINY), 1.0)[:, None]
+    direction = np.where(sliding[:, None], -v, lam_t)
+    scale = np.where(over, lim / np.sqrt(_einsum("ij,ij->i", direction, direction) + _TINY), 1.0)
     return np.where(over[:, None], direction * scale[:, None], lam_t)

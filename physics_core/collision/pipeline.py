@@ -2,7 +2,7 @@
 import numpy as np
 
 from .. import quaternion as qt
-from . import contact_rows, friction, restitution, sleep, solver
+from . import contact_rows, restitution, sleep, solver
 from .coloring import batches, color_contacts
 from .events import EventAccumulator
 from .manifold import Manifold, detect
@@ -30,6 +30,25 @@ class ContactScratch:
         self.colour = None
         self.colour_of = None     # (k,) colour of each contact of colour_key
         self.fresh_colours = 0    # colours of the last colouring from scratch
+
+
+def merge_tail(bounds, fraction):
+    """Merge the last, sparse colours into one batch (bounds, its first row).
+
+    Colour sizes fall off fast (a pile: 528, 353, …, 22, 5 rows), yet every
+    batch costs the same fixed numpy overhead. The trailing colours holding
+    at most `fraction` of the rows become one batch whose rows may share a
+    body: it is solved Jacobi-style with mass splitting, as the `jacobi`
+    solver is. With fraction 0 the sweep stays pure Gauss–Seidel."""
+    k = int(bounds[-1])
+    sizes = np.diff(bounds)
+    tail = np.cumsum(sizes[::-1])[::-1]             # rows from each batch to the end
+    fits = np.flatnonzero(tail <= fraction * k)
+    if len(fits) == 0 or fits[0] >= len(sizes) - 1:  # nothing, or a single batch: keep
+        return bounds, k
+    first = int(fits[0])
+    start = int(bounds[first])
+    return np.append(bounds[:first + 1], k), start
 
 
 class ContactPipeline:
@@ -71,7 +90,7 @@ class ContactPipeline:
             sc.events.reset()
         if p.sleep:
             sc.sleep.sync(s.awake)
-        if (s.awake & ~model.is_static).any():
+        if np.count_nonzero(s.awake & ~model.is_static):
             m = detect(model, s.pos, s.quat, p.margin)
         else:
             m = Manifold.empty()     # all asleep: nothing can start touching
@@ -88,21 +107,27 @@ class ContactPipeline:
             sc.warm.clear()
             sc.rewound = None
             return
-        order, bounds = self._batches(sc, m, moving)
+        order, bounds, summed_from = self._batches(sc, m, moving)
         m = m.take(order)
         V = contact_rows.body_velocities(s)
         sc.V0 = V.copy()
         inv_mass = world.inv_mass[:, 0]
         split = None
-        if self.summed:
-            split = np.maximum(np.bincount(m.a[moving[m.a]], minlength=model.n)
-                               + np.bincount(m.b[moving[m.b]], minlength=model.n), 1)
+        if summed_from < len(m):
+            # mass splitting: a body's inverse mass × its number of rows in the summed batch
+            ta, tb = m.a[summed_from:], m.b[summed_from:]
+            count = (np.bincount(ta[moving[ta]], minlength=model.n)
+                     + np.bincount(tb[moving[tb]], minlength=model.n))
+            split = np.ones((len(m), 2))
+            split[summed_from:, 0] = np.maximum(count[ta], 1)
+            split[summed_from:, 1] = np.maximum(count[tb], 1)
         if self.isotropic:
             iw, iso = None, world.inv_inertia[:, 0]
         else:
             iw, iso = contact_rows.world_inverse_inertia(s.quat, world.inv_inertia), None
         rows = contact_rows.build(model, m, s.pos, inv_mass, iw, iso, V, h, p, split, sc.rewound)
         rows.bounds = bounds
+        rows.summed_from = summed_from
         # a new contact starts held by static friction; from its next substep
         # on, its slip after the solve tells whether it slides
         slip = np.nan_to_num(sc.warm.load(rows, p.warm_start), nan=0.0)
@@ -111,9 +136,11 @@ class ContactPipeline:
         sc.rows, sc.V = rows, V
 
     def _batches(self, sc, m, moving):
+        """(order, bounds, summed_from): rows sorted by batch, the batch bounds,
+        and the first row of the trailing batch solved with summed updates."""
         k = len(m)
         if self.summed:
-            return np.arange(k), np.array([0, k])
+            return np.arange(k), np.array([0, k]), 0
         if (sc.colour is not None and np.array_equal(sc.colour_key, m.key)
                 and np.array_equal(sc.colour_awake, moving)):
             return sc.colour
@@ -132,7 +159,7 @@ class ContactPipeline:
             order, bounds = batches(colour)
         if prior is None:
             sc.fresh_colours = len(bounds) - 1
-        sc.colour = order, bounds
+        sc.colour = order, *merge_tail(bounds, self.p.tail_fraction)
         sc.colour_key, sc.colour_awake, sc.colour_of = m.key, moving, colour
         return sc.colour
 
@@ -157,7 +184,7 @@ class ContactPipeline:
                                   self.p.restitution_ramp)
         active = (e > 0.0) & (rows.lam[:, 0] > 0.0)
         sc.bounce = None
-        if active.any():
+        if np.count_nonzero(active):
             solver.solve_normal_targets(sc.V, rows, e * approach, active, 1, self.summed)
             # Fraction of the substep before the surfaces met (COURSE.md 5, time of
             # collision): s0 = s_end + h·approach closes at that speed. The bodies
@@ -179,8 +206,8 @@ class ContactPipeline:
         s, p = world.state, self.p
         V = sc.V
         dV = V - sc.V0
-        s.vel = np.ascontiguousarray(V[:, :3])
-        s.omega = np.ascontiguousarray(V[:, 3:])
+        s.vel[:] = V[:, :3]
+        s.omega[:] = V[:, 3:]
         if sc.bounce is not None:
             # a bounce acts from its time of impact τ h on: the end pose is the
             # impact pose plus the new velocity over the rest of the substep
@@ -196,7 +223,7 @@ class ContactPipeline:
         sep = dsep - rows.depth
         target = np.minimum(p.correction_rate * (-sep - p.slop) / h, p.max_correction_speed)
         dX = dV
-        if p.position_iterations and (target > 0.0).any():
+        if p.position_iterations and np.count_nonzero(target > 0.0):
             Xp = np.zeros((len(V), 3))
             solver.solve_pseudo(Xp, rows, np.maximum(target, 0.0), p.position_iterations, self.summed)
             dX = dV.copy()

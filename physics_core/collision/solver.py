@@ -13,7 +13,8 @@ velocities never collide. In `jacobi` mode there is one batch holding every
 row; a body's rows then read the same velocities and their changes are
 summed, and each body's inverse mass in the effective masses was multiplied
 by its number of contacts (mass splitting, Tonge et al. 2012), which keeps
-the summed update from overshooting.
+the summed update from overshooting. The Gauss–Seidel sweep ends with such
+a batch too when its last colours are sparse (pipeline.merge_tail).
 
 V is the (n, 6) C-ordered array of body (v, ω); a batch reads and writes
 its bodies' 12 numbers through flat indices (take / put), the cheapest
@@ -32,13 +33,22 @@ except ImportError:     # pragma: no cover - other numpy layouts
 
 
 def _slices(rows):
+    """(slice, summed) per batch: summed when its rows may share a body."""
     bd = rows.bounds
-    return [slice(int(bd[i]), int(bd[i + 1])) for i in range(len(bd) - 1)]
+    return [(slice(int(bd[i]), int(bd[i + 1])), int(bd[i]) >= rows.summed_from)
+            for i in range(len(bd) - 1)]
 
 
 def flat_index(ab, width):
     """(k, 2·width) indices of the two bodies' `width` numbers in a flat (n·width,) array."""
     return (ab[:, :, None] * width + np.arange(width)).reshape(len(ab), 2 * width)
+
+
+def _groups(rows, sel, summed):
+    """The sorted row indices `sel` split by batch, each with its summed flag."""
+    bd = rows.bounds
+    cut = np.split(sel, np.searchsorted(sel, bd[1:-1]))
+    return [(g, summed or int(bd[i]) >= rows.summed_from) for i, g in enumerate(cut) if len(g)]
 
 
 def _scatter(Vf, idx, new, delta, summed):
@@ -61,7 +71,8 @@ def warm_start(V, rows, summed):
     if not len(rows) or not rows.lam.any():
         return
     d = _einsum("kr,kri->ki", rows.lam, rows.M)
-    np.add.at(V.reshape(-1), flat_index(rows.ab, 6), d)
+    Vf = V.reshape(-1)
+    Vf += np.bincount(flat_index(rows.ab, 6).reshape(-1), d.reshape(-1), len(Vf))
 
 
 def solve_velocities(V, rows, iterations, summed, tolerance=0.0):
@@ -71,16 +82,16 @@ def solve_velocities(V, rows, iterations, summed, tolerance=0.0):
     Returns the number of sweeps done."""
     Vf = V.reshape(-1)
     views = []
-    for s in _slices(rows):
-        views.append((flat_index(rows.ab[s], 6), rows.Js[s], rows.M[s], rows.mass_bias[s],
+    for s, sum_s in _slices(rows):
+        views.append((sum_s or summed, flat_index(rows.ab[s], 6), rows.Js[s], rows.M[s], rows.mass_bias[s],
                       rows.g_tn[s], rows.mu[s], rows.sliding[s], rows.lam[s], rows.wtt[s], rows.w_tn[s],
-                      bool(rows.sliding[s].any())))
+                      bool(np.count_nonzero(rows.sliding[s]))))
     lam = rows.lam
     # an impulse change dλ moves a row's relative velocity by about dλ / m_eff
     limit = tolerance * float(rows.mass_n.min()) if tolerance > 0.0 and len(rows) else -1.0
     for sweep in range(iterations):
         before = lam.copy() if limit > 0.0 else None
-        for idx, Js, M, mass_bias, g_tn, mu, sliding, lam_s, wtt, w_tn, any_sliding in views:
+        for sum_s, idx, Js, M, mass_bias, g_tn, mu, sliding, lam_s, wtt, w_tn, any_sliding in views:
             VAB = Vf.take(idx)
             us = _einsum("kri,ki->kr", Js, VAB)      # (m_n u_n, W_tt⁻¹ u_t)
             old = lam_s.copy()
@@ -93,7 +104,7 @@ def solve_velocities(V, rows, iterations, summed, tolerance=0.0):
                 lt, ln, mu, sliding,
                 lambda: (_einsum("kij,kj->ki", wtt, us[:, 1:]) + w_tn * dn[:, None]) if any_sliding else None)
             d = _einsum("kr,kri->ki", lam_s - old, M)
-            _scatter(Vf, idx, VAB + d, d, summed)
+            _scatter(Vf, idx, VAB + d, d, sum_s)
         if before is not None and float(np.abs(lam - before).max()) < limit:
             return sweep + 1
     return iterations
@@ -107,13 +118,11 @@ def solve_normal_targets(V, rows, target, active, iterations, summed):
     idx_all = np.flatnonzero(active)
     if not len(idx_all):
         return
-    bd = rows.bounds
-    groups = np.split(idx_all, np.searchsorted(idx_all, bd[1:-1]))
-    groups = [g for g in groups if len(g)]
+    groups = _groups(rows, idx_all, summed)
     Vf = V.reshape(-1)
     lam = rows.lam
     for _ in range(iterations):
-        for g in groups:
+        for g, sum_g in groups:
             idx = flat_index(rows.ab[g], 6)
             VAB = Vf.take(idx)
             un = _einsum("ki,ki->k", rows.J[g, 0, :], VAB)
@@ -121,7 +130,7 @@ def solve_normal_targets(V, rows, target, active, iterations, summed):
             ln = np.maximum(ln_old - rows.mass_n[g] * (un - target[g]), 0.0)
             lam[g, 0] = ln
             d = (ln - ln_old)[:, None] * rows.M[g, 0, :]
-            _scatter(Vf, idx, VAB + d, d, summed)
+            _scatter(Vf, idx, VAB + d, d, sum_g)
 
 
 def solve_pseudo(Xp, rows, target, iterations, summed):
@@ -139,8 +148,7 @@ def solve_pseudo(Xp, rows, target, iterations, summed):
     bodies[rows.a[push]] = True
     bodies[rows.b[push]] = True
     sel = np.flatnonzero(bodies[rows.a] | bodies[rows.b])
-    bd = rows.bounds
-    groups = [g for g in np.split(sel, np.searchsorted(sel, bd[1:-1])) if len(g)]
+    groups = _groups(rows, sel, summed)
     n = rows.normal
     ima = -_einsum("ki,ki->k", rows.M[:, 0, 0:3], n)     # 1/m_a (0 static or asleep)
     imb = _einsum("ki,ki->k", rows.M[:, 0, 6:9], n)
@@ -150,13 +158,14 @@ def solve_pseudo(Xp, rows, target, iterations, summed):
     step = np.concatenate([-ima[:, None] * n, imb[:, None] * n], axis=1)
     jn = np.concatenate([-n, n], axis=1)
     Xf = Xp.reshape(-1)
-    views = [(flat_index(rows.ab[g], 3), jn[g], step[g], mass[g], target[g]) for g in groups]
-    lam = [np.zeros(len(g)) for g in groups]
+    views = [(flat_index(rows.ab[g], 3), jn[g], step[g], mass[g], target[g], sum_g)
+             for g, sum_g in groups]
+    lam = [np.zeros(len(g)) for g, _ in groups]
     for _ in range(iterations):
-        for (idx, j, st, m, tg), l_old in zip(views, lam):
+        for (idx, j, st, m, tg, sum_g), l_old in zip(views, lam):
             XAB = Xf.take(idx)
             un = _einsum("ki,ki->k", j, XAB)
             l_new = np.maximum(l_old - m * (un - tg), 0.0)
             d = (l_new - l_old)[:, None] * st
             l_old[:] = l_new
-            _scatter(Xf, idx, XAB + d, d, summed)
+            _scatter(Xf, idx, XAB + d, d, sum_g)
