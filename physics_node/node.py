@@ -37,7 +37,7 @@ from .diagnostics import DiagnosticsWindow
 from .outputs import Outputs
 from .pacing import StepPacer
 from .parameters import ParameterValueError, coerce, declare
-from .qos import COMMANDS
+from .qos import COMMANDS, per_body_events
 from .recorder import SCENE_MEDIA_TYPE, SESSION_METADATA, Recorder
 from .session import engine_version, session_metadata
 from .stepping import Stepper
@@ -89,10 +89,16 @@ class PhysicsNode(Node):
             self._start_recording()
 
         self._command_topics = {}
+        _, command_events = per_body_events()
         for name in self.model.names:
             for kind in (WRENCH, IMPULSE):
                 sub = self.create_subscription(
-                    WrenchStamped, f"~/{name}/{kind}", self._command_callback(name, kind), COMMANDS, raw=True
+                    WrenchStamped,
+                    f"~/{name}/{kind}",
+                    self._command_callback(name, kind),
+                    COMMANDS,
+                    raw=True,
+                    event_callbacks=command_events,
                 )
                 self._command_topics[(name, kind)] = sub.topic_name
 
@@ -215,7 +221,7 @@ class PhysicsNode(Node):
                 self._drop(topic, UNKNOWN_BODY, detail)
 
             self._unknown_body_subs[topic] = self.create_subscription(
-                WrenchStamped, topic, on_unknown, COMMANDS, raw=True
+                WrenchStamped, topic, on_unknown, COMMANDS, raw=True, event_callbacks=per_body_events()[1]
             )
 
     # -- services -------------------------------------------------------------

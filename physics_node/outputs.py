@@ -1,8 +1,10 @@
 """Everything the node sends: publishers, and the recording of what they send.
 
-With a recording open, each message is serialized once; the same CDR bytes
-are published and written to the file, so the file holds exactly what
-subscribers received.
+Each message is serialized once; the same CDR bytes are published and, with
+a recording open, written to the file, so the file holds exactly what
+subscribers received. The per-step messages (poses, odometry, contacts,
+markers, clock) are built as CDR directly (msg_adapters.cdr), all bodies at
+once; the rest go through rclpy's serializer.
 """
 
 from diagnostic_msgs.msg import DiagnosticArray
@@ -15,8 +17,16 @@ from std_msgs.msg import String
 from visualization_msgs.msg import MarkerArray
 
 from msg_adapters import BodyOdometry, SceneMarkers, body_markers, contact_cloud, pose_array, time_msg
+from msg_adapters.cdr import (
+    CdrLayoutError,
+    ContactCloudCdr,
+    OdometryCdr,
+    PoseArrayCdr,
+    SceneMarkersCdr,
+    clock_cdr,
+)
 
-from .qos import COMMANDS, LATCHED, STREAM
+from .qos import COMMANDS, LATCHED, STREAM, per_body_events
 from .recorder import EVENTS_SUFFIX, RESET_EVENT
 
 
@@ -32,13 +42,21 @@ class Outputs:
         self.markers = pub(MarkerArray, "~/markers", STREAM)
         self.bodies = pub(MarkerArray, "~/bodies", LATCHED)
         self.diagnostics = pub(DiagnosticArray, "/diagnostics", STREAM)
-        self.odom = [pub(Odometry, f"~/{name}/odom", STREAM) for name in model.names]
+        odom_events, _ = per_body_events()
+        self.odom = [pub(Odometry, f"~/{name}/odom", STREAM, event_callbacks=odom_events) for name in model.names]
         self._qos = {p.topic_name: q for p, q in self._all_publishers()}
+        self._topic = {p: p.topic_name for p, _ in self._all_publishers()}
+        # What send_state publishes, in order, and the recording's channels for it.
+        self._state = [
+            (self.poses, PoseArray),
+            *((p, Odometry) for p in self.odom),
+            (self.contacts, PointCloud2),
+            (self.markers, MarkerArray),
+        ]
+        self._state_publishers = [p for p, _ in self._state]
+        self._state_channels = None
         self.events_topic = node.get_fully_qualified_name() + EVENTS_SUFFIX
-        # Messages are published (serialized) before the next step changes
-        # them, so one set per body can be reused.
-        self._odometry = BodyOdometry(model.names)
-        self._markers = SceneMarkers(model)
+        self._build_state = _state_builder(model, node.get_logger())
 
     def _all_publishers(self):
         yield self.clock, LATCHED
@@ -50,23 +68,31 @@ class Outputs:
         if self.recorder is None:
             publisher.publish(msg)
             return
-        data = serialize_message(msg)
+        self._send_cdr(publisher, type(msg), serialize_message(msg), time_ns, step)
+
+    def _send_cdr(self, publisher, msg_class, data, time_ns, step):
+        """Publish (and record) a message already serialized."""
         publisher.publish(data)
-        topic = publisher.topic_name
-        self.recorder.write(topic, type(msg), data, time_ns, step, self._qos[topic])
+        if self.recorder is not None:
+            topic = self._topic[publisher]
+            self.recorder.write(topic, msg_class, data, time_ns, step, self._qos[topic])
 
     # -- per step ----------------------------------------------------------
     def send_clock(self, time_ns, step):
-        self._send(self.clock, Clock(clock=time_msg(time_ns)), time_ns, step)
+        self._send_cdr(self.clock, Clock, clock_cdr(time_ns), time_ns, step)
 
     def send_state(self, world, time_ns, step):
-        s = world.state
-        self._send(self.poses, pose_array(s.pos, s.quat, time_ns), time_ns, step)
-        for publisher, msg in zip(self.odom, self._odometry.build(s.pos, s.quat, s.vel, s.omega, time_ns)):
-            self._send(publisher, msg, time_ns, step)
-        contacts = world.contacts
-        self._send(self.contacts, contact_cloud(contacts, time_ns), time_ns, step)
-        self._send(self.markers, self._markers.build(s.pos, s.quat, contacts, time_ns), time_ns, step)
+        """Poses, every body's odometry, contacts and markers of one step."""
+        datas = self._build_state(world.state, world.contacts, time_ns)
+        for publisher, data in zip(self._state_publishers, datas):
+            publisher.publish(data)
+        if self.recorder is not None:
+            if self._state_channels is None:
+                topic = self._topic
+                self._state_channels = [
+                    self.recorder.channel(topic[p], cls, self._qos[topic[p]]) for p, cls in self._state
+                ]
+            self.recorder.write_many(self._state_channels, datas, time_ns, step)
 
     def send_bodies(self, world, time_ns, step):
         msg = body_markers(self.model, world.state.pos, world.state.quat, time_ns)
@@ -96,3 +122,44 @@ class Outputs:
             return
         data = serialize_message(String(data=RESET_EVENT))
         self.recorder.write(self.events_topic, String, data, time_ns, step, STREAM)
+
+
+def _state_builder(model, logger):
+    """`build(state, contacts, time_ns)` -> the CDR bytes of poses, every
+    body's odometry, contacts and markers, in that order. The builders of
+    msg_adapters.cdr keep one buffer each and write all bodies at once; if
+    they cannot lay out what this rmw serializes, the object builders and
+    rclpy's serializer give the same messages, more slowly."""
+    try:
+        poses = PoseArrayCdr(len(model.names))
+        odometry = OdometryCdr(model.names)
+        cloud = ContactCloudCdr()
+        markers = SceneMarkersCdr(model, capacity=max(64, 4 * len(model.names)))
+    except CdrLayoutError as exc:
+        logger.warning(f"per-step messages go through rclpy's serializer: {exc}")
+        return _serialized_state_builder(model)
+
+    def build(s, contacts, time_ns):
+        return [
+            poses.build(s.pos, s.quat, time_ns),
+            *odometry.build(s.pos, s.quat, s.vel, s.omega, time_ns),
+            cloud.build(contacts, time_ns),
+            markers.build(s.pos, s.quat, contacts, time_ns),
+        ]
+
+    return build
+
+
+def _serialized_state_builder(model):
+    odometry, markers = BodyOdometry(model.names), SceneMarkers(model)
+
+    def build(s, contacts, time_ns):
+        msgs = [
+            pose_array(s.pos, s.quat, time_ns),
+            *odometry.build(s.pos, s.quat, s.vel, s.omega, time_ns),
+            contact_cloud(contacts, time_ns),
+            markers.build(s.pos, s.quat, contacts, time_ns),
+        ]
+        return [serialize_message(m) for m in msgs]
+
+    return build

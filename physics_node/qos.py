@@ -26,6 +26,23 @@ COMMANDS = QoSProfile(
     durability=DurabilityPolicy.VOLATILE,
 )
 
+
+def per_body_events():
+    """Event callbacks for the per-body publishers and subscriptions (odometry,
+    wrench, impulse): none. rclpy otherwise gives each one handlers that log
+    incompatible-QoS and incompatible-type peers, and every handler is a
+    waitable the executor re-examines before every callback: with 100 bodies
+    about 600 of them, over 10 ms per timer tick. The peer with the
+    mismatched QoS or type still logs it on its side; the node-wide topics
+    keep rclpy's default handlers."""
+    from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
+
+    return (
+        PublisherEventCallbacks(use_default_callbacks=False),
+        SubscriptionEventCallbacks(use_default_callbacks=False),
+    )
+
+
 # rmw's "infinite" duration, as rosbag2 writes it.
 _INFINITE = {"sec": 9223372036, "nsec": 854775807}
 

@@ -13,9 +13,13 @@ process killed outright loses at most that last chunk.
 """
 
 import os
+import struct
 import time
+from itertools import chain
 
 import mcap
+from mcap.opcode import Opcode
+from mcap.records import MessageIndex
 from mcap.writer import CompressionType, Writer
 
 from msg_adapters.schema import ros2msg_schema, type_name
@@ -35,8 +39,103 @@ EVENTS_SUFFIX = "/events"
 RESET_EVENT = "reset"
 
 
+# A Message record's opcode, length and fields up to its data.
+_MESSAGE_HEAD = struct.Struct("<BQHIQQ")
+_MESSAGE_FIELDS_BYTES = _MESSAGE_HEAD.size - 9  # channel id, sequence, log and publish time
+
+
 class RecorderError(RuntimeError):
     pass
+
+
+class _PackedMessageIndex(MessageIndex):
+    """A chunk's MessageIndex record (one per channel and chunk), packed in
+    one call rather than written field by field and entry by entry."""
+
+    def write(self, stream):
+        n = len(self.records)
+        head = (Opcode.MESSAGE_INDEX, 6 + 16 * n, self.channel_id, 16 * n)
+        stream.write(struct.pack(f"<BQHI{2 * n}Q", *head, *chain.from_iterable(self.records)))
+
+
+class _ChunkAppender:
+    """Appends Message records to the chunk mcap's Writer is building, many
+    at a time, keeping the writer's statistics and the chunk's message
+    indexes as `Writer.add_message` does (one record object and about twenty
+    small writes per message otherwise).
+
+    This relies on how mcap's Writer keeps its chunk; `attach` returns None
+    when the installed mcap does not look that way, and the recorder then
+    goes through `add_message`."""
+
+    def __init__(self, builder, statistics, maybe_finalize):
+        self._builder, self._statistics, self._maybe_finalize = builder, statistics, maybe_finalize
+        # Messages per channel are counted per batch of channels and added to
+        # the statistics in `settle`, before the summary is written.
+        self._batches = {}
+
+    @classmethod
+    def attach(cls, writer):
+        builder = getattr(writer, "_Writer__chunk_builder", None)
+        statistics = getattr(writer, "_Writer__statistics", None)
+        maybe_finalize = getattr(writer, "_Writer__maybe_finalize_chunk", None)
+        record_writer = getattr(builder, "record_writer", None)
+        chunk_fields = ("message_indices", "num_messages", "message_start_time", "message_end_time")
+        statistics_fields = ("channel_message_counts", "message_count", "message_start_time", "message_end_time")
+        needed = (
+            all(hasattr(builder, a) for a in chunk_fields)
+            and hasattr(getattr(record_writer, "_buffer", None), "write")
+            and all(hasattr(statistics, a) for a in statistics_fields)
+            and callable(maybe_finalize)
+        )
+        return cls(builder, statistics, maybe_finalize) if needed else None
+
+    def add(self, channel_ids, datas, time_ns, sequence):
+        """Message records at one time and sequence number; returns how many."""
+        channel_ids = tuple(channel_ids)
+        n = len(channel_ids)
+        if not n:
+            return 0
+        builder, stats = self._builder, self._statistics
+        buffer = builder.record_writer._buffer
+        offset = buffer.tell()
+        index_of, new_index = builder.message_indices.get, self._new_index
+        entries = [(index_of(c) or new_index(c)).records for c in channel_ids]
+        pack, head_bytes, opcode = _MESSAGE_HEAD.pack, _MESSAGE_HEAD.size, int(Opcode.MESSAGE)
+        parts = []
+        for channel_id, data, records in zip(channel_ids, datas, entries):
+            size = len(data)
+            records.append((time_ns, offset))
+            parts += (pack(opcode, _MESSAGE_FIELDS_BYTES + size, channel_id, sequence, time_ns, time_ns), data)
+            offset += head_bytes + size
+        buffer.write(b"".join(parts))
+        self._batches[channel_ids] = self._batches.get(channel_ids, 0) + 1
+        if builder.num_messages == 0:
+            builder.message_start_time = time_ns
+        else:
+            builder.message_start_time = min(builder.message_start_time, time_ns)
+        builder.message_end_time = max(builder.message_end_time, time_ns)
+        builder.num_messages += n
+        if stats.message_count == 0:
+            stats.message_start_time = time_ns
+        else:
+            stats.message_start_time = min(stats.message_start_time, time_ns)
+        stats.message_end_time = max(stats.message_end_time, time_ns)
+        stats.message_count += n
+        self._maybe_finalize()
+        return n
+
+    def _new_index(self, channel_id):
+        index = self._builder.message_indices[channel_id] = _PackedMessageIndex(channel_id=channel_id, records=[])
+        return index
+
+    def settle(self):
+        """Add the per-channel message counts to the writer's statistics."""
+        counts = self._statistics.channel_message_counts
+        for channel_ids, batches in self._batches.items():
+            for channel_id in channel_ids:
+                counts[channel_id] += batches
+        self._batches.clear()
 
 
 class Recorder:
@@ -52,6 +151,8 @@ class Recorder:
         self._writer = None
         self._schemas = {}  # type name -> schema id
         self._channels = {}  # topic -> (channel id, type name)
+        self._channel_ids = {}  # (topic, class) -> channel id, once checked
+        self._appender = None
         self._last_flush = 0.0
         self.message_count = 0
 
@@ -64,6 +165,7 @@ class Recorder:
         self._file = open(self.path, "wb")
         self._writer = Writer(self._file, chunk_size=self._chunk_size, compression=CompressionType.ZSTD)
         self._writer.start(profile=PROFILE, library=f"{self._library}; mcap {mcap.__version__}")
+        self._appender = _ChunkAppender.attach(self._writer)
         self._file.flush()
         self._last_flush = time.monotonic()
         return self
@@ -71,11 +173,13 @@ class Recorder:
     def close(self):
         """Finish the file (summary and statistics) and close it. Safe to call
         twice and from exit paths."""
-        writer, f = self._writer, self._file
-        self._writer = self._file = None
+        writer, f, appender = self._writer, self._file, self._appender
+        self._writer = self._file = self._appender = None
         if writer is None:
             return
         try:
+            if appender is not None:
+                appender.settle()
             writer.finish()
         finally:
             f.close()
@@ -106,6 +210,14 @@ class Recorder:
     def channel(self, topic, msg_class, qos=STREAM):
         """Channel id for `topic`, registering schema and channel the first
         time the topic is seen."""
+        known_id = self._channel_ids.get((topic, msg_class))
+        if known_id is not None:
+            return known_id
+        channel_id = self._register(topic, msg_class, qos)
+        self._channel_ids[(topic, msg_class)] = channel_id
+        return channel_id
+
+    def _register(self, topic, msg_class, qos):
         known = self._channels.get(topic)
         name = type_name(msg_class)
         if known is not None:
@@ -130,12 +242,23 @@ class Recorder:
 
     def write(self, topic, msg_class, data, time_ns, step=0, qos=STREAM):
         """One CDR-serialized message at sim time `time_ns` of step `step`."""
-        channel_id = self.channel(topic, msg_class, qos)
+        self.write_many((self.channel(topic, msg_class, qos),), (data,), time_ns, step)
+
+    def write_many(self, channel_ids, datas, time_ns, step=0):
+        """CDR-serialized messages that share a sim time and step (the
+        outputs of one step), on channels from `channel`, in order."""
         self._require_open()
-        self._writer.add_message(
-            channel_id=channel_id, log_time=int(time_ns), publish_time=int(time_ns), data=data, sequence=int(step)
-        )
-        self.message_count += 1
+        if len(channel_ids) != len(datas):
+            raise ValueError(f"{len(channel_ids)} channels but {len(datas)} messages")
+        time_ns, step = int(time_ns), int(step)
+        if self._appender is not None:
+            self.message_count += self._appender.add(channel_ids, datas, time_ns, step)
+        else:
+            for channel_id, data in zip(channel_ids, datas):
+                self._writer.add_message(
+                    channel_id=channel_id, log_time=time_ns, publish_time=time_ns, data=data, sequence=step
+                )
+                self.message_count += 1
         if time.monotonic() - self._last_flush >= self._flush_period:
             self.flush()
 

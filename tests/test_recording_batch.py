@@ -1,0 +1,77 @@
+"""Recorder.write_many (a step's outputs at once) writes the file
+`Writer.add_message` would: same messages, indexes and statistics."""
+
+import pytest
+from mcap.reader import make_reader
+from nav_msgs.msg import Odometry
+from rclpy.serialization import serialize_message
+from rosgraph_msgs.msg import Clock
+
+from msg_adapters import odometry, time_msg
+from physics_node import recorder as recorder_module
+from physics_node.qos import LATCHED, STREAM
+from physics_node.recorder import Recorder
+from physics_node.recording_reader import Recording
+
+BODIES = ("a", "bb", "ccc")
+
+
+def _payloads(steps):
+    """(time, clock bytes, odometry bytes per body) per step, serialized once
+    (rclpy leaves CDR padding uninitialised, so two serializations differ)."""
+    out = []
+    for k in range(steps):
+        t = 4_166_667 * k
+        odom = [
+            serialize_message(odometry(name, [k, i, 0.0], [1.0, 0, 0, 0], [0, 0, 0], [0, 0, 0], t))
+            for i, name in enumerate(BODIES)
+        ]
+        out.append((t, serialize_message(Clock(clock=time_msg(t))), odom))
+    return out
+
+
+def _session(path, payloads, chunk_size, batched=True):
+    """Clock one by one, every body's odometry per step: with write_many or with write."""
+    topics = [f"/physics/{name}/odom" for name in BODIES]
+    with Recorder(path, chunk_size=chunk_size) as rec:
+        rec.add_metadata("physics_node", {"node": "/physics"})
+        rec.channel("/clock", Clock, LATCHED)
+        channels = [rec.channel(topic, Odometry, STREAM) for topic in topics]
+        for k, (t, clock, odom) in enumerate(payloads):
+            rec.write("/clock", Clock, clock, t, k, LATCHED)
+            if batched:
+                rec.write_many(channels, odom, t, k)
+            else:
+                for topic, data in zip(topics, odom):
+                    rec.write(topic, Odometry, data, t, k, STREAM)
+        assert rec.message_count == len(payloads) * (1 + len(BODIES))
+    return path
+
+
+def _read(path):
+    with open(path, "rb") as f:
+        reader = make_reader(f)
+        summary = reader.get_summary()
+        messages = [(c.topic, m.log_time, m.publish_time, m.sequence, m.data) for _, c, m in reader.iter_messages()]
+        one_topic = [m.sequence for _, _, m in reader.iter_messages(topics=["/physics/bb/odom"])]
+    stats = summary.statistics
+    counts = {summary.channels[c].topic: n for c, n in stats.channel_message_counts.items()}
+    return messages, one_topic, counts, (stats.message_count, stats.message_start_time, stats.message_end_time)
+
+
+@pytest.mark.parametrize("chunk_size", [1 << 20, 2000])  # one chunk; a chunk every few steps
+def test_batched_writes_read_back_like_add_message(tmp_path, monkeypatch, chunk_size):
+    steps = 40
+    payloads = _payloads(steps)
+    batched = _read(_session(tmp_path / "batched.mcap", payloads, chunk_size))
+    with monkeypatch.context() as m:  # mcap's own Writer.add_message, message by message
+        m.setattr(recorder_module._ChunkAppender, "attach", classmethod(lambda cls, writer: None))
+        single = _read(_session(tmp_path / "single.mcap", payloads, chunk_size, batched=False))
+    assert batched == single
+    messages, one_topic, counts, totals = batched
+    assert len(messages) == steps * 4 and one_topic == list(range(steps))
+    assert counts == {"/clock": steps, **{f"/physics/{n}/odom": steps for n in BODIES}}
+    assert totals == (steps * 4, 0, 4_166_667 * (steps - 1))
+    assert [m.sequence for m in Recording(tmp_path / "batched.mcap").messages()][:4] == [0, 0, 0, 0]
+    # byte for byte the file mcap's Writer writes itself
+    assert (tmp_path / "batched.mcap").read_bytes() == (tmp_path / "single.mcap").read_bytes()
