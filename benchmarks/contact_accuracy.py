@@ -229,8 +229,10 @@ def report(data):
                   "mean impact-time error", "max penetration (m)", "rebound speed (m/s)",
                   "ccd stage / step", "step"],
                  [["off" if not r["ccd"] else "on", r["ccd_iterations"] if r["ccd"] else "—",
-                   r["substeps"], f"{r['tunnelled']}/{r['runs']}", md.seconds(r["max_time_error"]),
-                   md.seconds(r["mean_time_error"]),
+                   r["substeps"], f"{r['tunnelled']}/{r['runs']}",
+                   # with a run through the wall there is no rebound to time
+                   md.seconds(r["max_time_error"]) if not r["tunnelled"] else "—",
+                   md.seconds(r["mean_time_error"]) if not r["tunnelled"] else "—",
                    "through the wall" if r["max_penetration"] == float("inf")
                    else md.sci(r["max_penetration"]),
                    md.num(r["mean_rebound_speed"]), md.seconds(r["ccd_seconds_per_step"]),

@@ -40,7 +40,7 @@ def seconds(x):
     """A duration in the unit that reads best (ns … s)."""
     if x is None or x != x:
         return "—"
-    for unit, scale in (("s", 1.0), ("ms", 1e-3), ("µs", 1e-6)):
+    for unit, scale in (("s", 1.0), ("ms", 1e-3), ("µs", 1e-6), ("ns", 1e-9)):
         if abs(x) >= scale:
             return f"{x / scale:.3g} {unit}"
-    return f"{x / 1e-9:.3g} ns"
+    return "< 1 ns"

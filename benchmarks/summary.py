@@ -9,6 +9,7 @@ from . import markdown as md
 from .accuracy import LABELS, TARGETS, orders_table, reading_table
 from .problems import INTEGRATORS, ORDERS_EXPECTED, PROBLEMS
 from .results_io import DEFAULT_OUT, read_json, write_text
+from .stability_cases import long_run_verdict
 
 README = os.path.join(os.path.dirname(DEFAULT_OUT), os.pardir, "README.md")
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
@@ -44,7 +45,7 @@ def write(out, update_readme=False):
 def build(out, prefix="", level=2):
     h = "#" * level
     parts = [
-        "Regenerate with `physics-bench all` (about 25 min) or `physics-bench all --quick` "
+        "Regenerate with `physics-bench all` (about half an hour) or `physics-bench all --quick` "
         "(CI-sized, a few minutes); each study alone with `physics-bench accuracy|stability|"
         f"scale|effects`. Tables: [benchmarks/results/]({prefix or './'}) (`*.md`, raw data in "
         "`*.json`). "
@@ -214,6 +215,10 @@ def _contacts(out, prefix, level):
     return "\n".join(lines)
 
 
+def _bold_fail(verdict):
+    return "**fail**" if verdict == "fail" else verdict
+
+
 # ---- stability --------------------------------------------------------------------
 def _stability(out, prefix, level):
     data = read_json(out, "stability.json")
@@ -229,8 +234,7 @@ def _stability(out, prefix, level):
     rows += [[f"10⁵ steps, e = 0.5 orbit, {LABELS[r['integrator']]}",
               f"max abs(ΔE/E) {r['max_rel_energy_error']:.2g}, last/first tenth "
               f"{r['last_tenth'] / max(r['first_tenth'], 1e-300):.2f}",
-              "pass" if r["bounded"] else ("exempt" if r["integrator"] == "explicit_euler" else "**fail**")]
-             for r in data["long_runs"]]
+              _bold_fail(long_run_verdict(r))] for r in data["long_runs"]]
     for key, v in data["random"].items():
         kind, integ = key.split(":")
         if kind == "passive":
