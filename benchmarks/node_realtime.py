@@ -1,47 +1,54 @@
 """Does the ROS 2 node hold real time? Step, publish and recording cost per step.
 
     physics-bench node [--quick] [--out DIR]
-    python -m benchmarks.node_realtime [--quick] [--out DIR] [--seconds S] [--only NAME ...]
+    python -m benchmarks.node_realtime [--quick] [--out DIR] [--seconds S] [--only CASE ...]
 
 Targets: 100 bodies at 1 kHz (dt = 1 ms) and 1,000 bodies at 240 Hz
 (dt = 1/240 s), real_time_factor 1, every output published every step
-(`publish_every` 1), and recording (`record`) costing under 10 % of the step.
+(`publish_every` 1: `/clock`, `~/poses`, one `~/<body>/odom` per body,
+`~/contacts`, `~/markers`), and recording (`record`) costing under 10 % of
+the step.
 
-Scenes (generated, written to a temporary YAML file the node loads):
+Scenes (generated dicts, written to a temporary YAML file the node loads):
 
 - `contacts`: spheres (r = 0.1 m, 0.25 m apart on a square grid) dropped from
-  up to 2 cm onto a ground plane, then resting on it, with `sleep: false` so
-  every body's ground contact goes through the solver every step and every
-  step publishes one contact event per body (the demanding case);
-- `contacts_sleep`: the same with the engine's default `sleep: true`: the
-  spheres settle within about a second and then sleep, leaving the solver
-  and the contact stream (the usual case for a scene at rest);
-- `free`: the same spheres falling under gravity with no plane and no
-  `contacts` effect, so what is left is the node's own cost.
+  up to 2 cm onto a ground plane, then resting on it, with `sleep: false`, so
+  every sphere's ground contact goes through the solver every step and
+  every step publishes one contact event per sphere (the demanding case);
+- `contacts, sleep`: the same with the engine's default `sleep: true`,
+  stepped headless for 1.5 s of sim time before the node spins, so the
+  window shows the pile asleep (the usual case for a scene at rest);
+- `free`: the same spheres falling under gravity, no plane and no `contacts`
+  effect, so what is left is the node's own cost.
 
 How it is measured: in this process, the node class `PhysicsNode` spun by a
 `SingleThreadedExecutor` with `spin_once` in a loop, as `physics-node`
-(physics_node/main.py) does, with `real_time_factor` 1; each case runs with
-and without `record`. A separate process subscribes to `~/poses` (raw CDR,
-not deserialized) and counts what arrives, so publishing has a real
-subscriber and the table shows the poses actually delivered. After a warm-up
-(discovery, first steps), the node runs for a fixed wall time (quick 5 s,
-full 20 s). Per step the node's `_advance` (the whole step: commands, engine
+(physics_node/main.py) runs it, with `real_time_factor` 1; each case runs
+without and with `record`. A separate process subscribes to `~/poses` (raw
+CDR, not deserialized) and counts what arrives, so publishing has a real
+subscriber, and the table shows the rate actually delivered. After a
+warm-up (discovery, first steps; 1.5 s), the node runs for a fixed wall time
+(quick 5 s, full 20 s). Every step the node's `_advance` (commands, engine
 step, `/clock`, poses, odometry, contacts, markers, recording) is timed, and
-inside it the engine step (`Stepper.advance`) and every `Recorder.write`:
+inside it the engine step and the recorder's writes:
 
 - engine = `Stepper.advance` (queued commands, none here, and `world.step`);
-- record = `Recorder.write` calls (MCAP framing, chunking, zstd);
-- publish = the rest of the step: building the messages, serializing them
-  and handing them to the middleware;
-- recording overhead = mean step time with `record` minus without, as a
-  share of the step time with `record` (what recording adds to a step,
-  including the wrapper's own instrumentation).
+- record = `Recorder.write_many` / `write` (MCAP records, indexes, and the
+  zstd compression and CRC of each chunk when it fills);
+- publish = the rest of the step: building the messages as CDR, handing them
+  to the middleware (`Publisher.publish`), the node's bookkeeping;
+- per message = publish time over the messages of a step (bodies + 4);
+- recording overhead = mean step with `record` minus mean step without, as a
+  share of the step with `record`, and as a share of dt;
+- in steps = share of the wall time spent inside steps (the rest is the
+  executor, timers and idle time); CPU = process CPU time over wall time
+  (all threads: the middleware's too); load = the machine's 1-minute load
+  average at the end of the row (other work on the machine slows every row).
 
-The real-time factor is sim time advanced over wall time in the measured
-window; the node drops a backlog of more than 0.25 s, so a node that cannot
-keep up shows a factor below 1, not a growing lag. p99 is over the steps of
-the window. This is a benchmark, not a test: nothing here asserts.
+The real-time factor is sim time advanced over wall time in the window; the
+node drops a backlog of more than 0.25 s, so a node that cannot keep up
+shows a factor below 1, not a growing lag. p99 is over the steps of the
+window. This is a benchmark, not a test: nothing here asserts.
 """
 import argparse
 import gc
@@ -51,7 +58,7 @@ import sys
 import tempfile
 import time
 from dataclasses import dataclass
-from time import perf_counter
+from time import perf_counter, thread_time
 
 if __package__ in (None, ""):            # run as a script
     sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -219,33 +226,33 @@ def listen(topic):
 
 class StepProbe:
     """Times every step of a node: the whole `_advance`, the engine step
-    inside it and the recorder's writes inside it."""
+    inside it and the recorder's writes inside it, each in wall time and in
+    CPU time of the node's thread (which other load on the machine does not
+    inflate the way it inflates wall time)."""
 
     def __init__(self, node, capacity):
         self.measuring = False
         self.n = 0
-        self.loop = np.zeros(capacity)
-        self.engine = np.zeros(capacity)
-        self.record = np.zeros(capacity)
-        self._engine = 0.0
-        self._record = 0.0
+        # columns: step, engine, record; wall then thread CPU
+        self.samples_ = np.zeros((capacity, 6))
+        self._engine = (0.0, 0.0)
+        self._record = [0.0, 0.0]
         stepper_advance = node.stepper.advance
         node_advance = node._advance
 
         def timed_stepper_advance():
-            t0 = perf_counter()
+            t0, c0 = perf_counter(), thread_time()
             boundary = stepper_advance()
-            self._engine = perf_counter() - t0
+            self._engine = (perf_counter() - t0, thread_time() - c0)
             return boundary
 
         def timed_node_advance(publish_all=False):
-            self._record = 0.0
-            t0 = perf_counter()
+            self._record = [0.0, 0.0]
+            t0, c0 = perf_counter(), thread_time()
             node_advance(publish_all)
-            total = perf_counter() - t0
-            if self.measuring and self.n < len(self.loop):
-                i = self.n
-                self.loop[i], self.engine[i], self.record[i] = total, self._engine, self._record
+            wall, cpu = perf_counter() - t0, thread_time() - c0
+            if self.measuring and self.n < len(self.samples_):
+                self.samples_[self.n] = (wall, self._engine[0], self._record[0], cpu, self._engine[1], self._record[1])
                 self.n += 1
 
         node.stepper.advance = timed_stepper_advance
@@ -257,19 +264,23 @@ class StepProbe:
             write = getattr(recorder, name)
 
             def timed_write(*args, **kwargs):
-                t0 = perf_counter()
+                t0, c0 = perf_counter(), thread_time()
                 write(*args, **kwargs)
-                self._record += perf_counter() - t0
+                self._record[0] += perf_counter() - t0
+                self._record[1] += thread_time() - c0
 
             setattr(recorder, name, timed_write)
 
     def samples(self):
-        n = self.n
-        return self.loop[:n], self.engine[:n], self.record[:n]
+        """(step, engine, record) wall seconds per step, then the same in thread CPU seconds."""
+        return tuple(self.samples_[: self.n].T)
 
 
-def measure(case, record, seconds, workdir, listener=True):
-    """Run the node on `case` for `seconds` of wall time after a warm-up; one row."""
+def measure(case, record, seconds, workdir, listener=True, executor="single"):
+    """Run the node on `case` for `seconds` of wall time after a warm-up; one row.
+    `executor`: "single" (rclpy's SingleThreadedExecutor, as physics-node) or
+    "events" (rclpy.experimental's EventsExecutor, for comparison)."""
+    executor_kind = executor
     ros_environment()
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
@@ -300,7 +311,11 @@ def measure(case, record, seconds, workdir, listener=True):
                 node.world.step()
         capacity = int(1.2 * (seconds + WARMUP_SECONDS) / case.dt) + 1000
         probe = StepProbe(node, capacity)
-        executor = SingleThreadedExecutor()
+        if executor_kind == "events":
+            from rclpy.experimental.events_executor import EventsExecutor
+            executor = EventsExecutor()
+        else:
+            executor = SingleThreadedExecutor()
         executor.add_node(node)
 
         def spin():
@@ -344,7 +359,7 @@ def measure(case, record, seconds, workdir, listener=True):
     if record:
         os.remove(record_path)
 
-    loop, engine, rec = probe.samples()
+    loop, engine, rec, loop_cpu, engine_cpu, rec_cpu = probe.samples()
     publish = loop - engine - rec
     ms = 1e3
 
@@ -353,12 +368,16 @@ def measure(case, record, seconds, workdir, listener=True):
 
     row = {
         "case": case.name, "scene": case.scene, "bodies": case.bodies, "dt_ms": case.dt * ms,
-        "rate_hz": case.rate_hz, "record": record, "wall_s": wall, "sim_s": sim, "steps": steps,
+        "rate_hz": case.rate_hz, "record": record, "executor": executor_kind,
+        "wall_s": wall, "sim_s": sim, "steps": steps,
         "rtf": sim / wall, "cpu_share": cpu / wall, "busy_share": float(loop.sum()) / wall,
         "contacts_at_end": contacts_now,
     }
     for name, a in (("step", loop), ("engine", engine), ("publish", publish), ("record", rec)):
         row[f"{name}_mean_ms"], row[f"{name}_p99_ms"] = stat(a)
+    for name, a in (("step", loop_cpu), ("engine", engine_cpu), ("publish", loop_cpu - engine_cpu - rec_cpu),
+                    ("record", rec_cpu)):
+        row[f"{name}_cpu_ms"] = float(a.mean() * ms) if len(a) else None
     row["record_share_direct"] = float(rec.sum() / loop.sum()) if record and len(loop) else None
     row["listener_ready"] = ready
     row["poses_received_hz"] = received / listen_s if received is not None and listen_s else None
@@ -368,10 +387,9 @@ def measure(case, record, seconds, workdir, listener=True):
     return row
 
 
-
 # ---- the study ------------------------------------------------------------------------
 
-def run(quick=False, out_dir=None, seconds=None, only=None, listener=True):
+def run(quick=False, out_dir=None, seconds=None, only=None, listener=True, executor="single"):
     """Every case with and without `record`; rows as `measure` returns them.
     Writes `node_realtime.md` and `node_realtime.json` into `out_dir` if given."""
     from .progress import Progress
@@ -384,7 +402,7 @@ def run(quick=False, out_dir=None, seconds=None, only=None, listener=True):
     with tempfile.TemporaryDirectory(prefix="node_realtime_") as workdir:
         for case in cases:
             for record in (False, True):
-                row = measure(case, record, seconds, workdir, listener=listener)
+                row = measure(case, record, seconds, workdir, listener=listener, executor=executor)
                 rows.append(row)
                 progress.step(f"{case.name}{', record' if record else ''}: real-time factor "
                               f"{row['rtf']:.3f}, step {row['step_mean_ms']:.3f} ms mean "
@@ -399,15 +417,17 @@ def run(quick=False, out_dir=None, seconds=None, only=None, listener=True):
 
 
 def add_overheads(rows):
-    """Recording overhead of each recorded row against the same case unrecorded."""
-    plain = {r["case"]: r for r in rows if not r["record"]}
+    """Recording overhead of each recorded row against the same case unrecorded,
+    in wall time and in the node thread's CPU time."""
+    plain = {(r["case"], r.get("executor")): r for r in rows if not r["record"]}
     for r in rows:
-        base = plain.get(r["case"])
-        if r["record"] and base and r["step_mean_ms"]:
-            r["record_overhead_ms"] = r["step_mean_ms"] - base["step_mean_ms"]
-            r["record_overhead_share"] = r["record_overhead_ms"] / r["step_mean_ms"]
-        else:
-            r["record_overhead_ms"] = r["record_overhead_share"] = None
+        base = plain.get((r["case"], r.get("executor")))
+        for key, clock in (("", "step_mean_ms"), ("_cpu", "step_cpu_ms")):
+            if r["record"] and base and r[clock] and base[clock]:
+                r[f"record_overhead{key}_ms"] = r[clock] - base[clock]
+                r[f"record_overhead{key}_share"] = r[f"record_overhead{key}_ms"] / r[clock]
+            else:
+                r[f"record_overhead{key}_ms"] = r[f"record_overhead{key}_share"] = None
 
 
 def _f(x, digits=3):
@@ -418,48 +438,86 @@ def _pct(x):
     return "—" if x is None else f"{100 * x:.1f} %"
 
 
+def _label(row):
+    return row["case"] + (" (events executor)" if row.get("executor") == "events" else "")
+
+
+def messages_per_step(row):
+    """`/clock`, poses, contacts, markers and one odometry per body."""
+    return row["bodies"] + 4
+
+
 def markdown(rows, seconds, machine_line):
     from .markdown import table
-    header = ["case", "record", "real-time factor", "step mean / p99 (ms)", "engine mean / p99",
-              "publish mean / p99", "record mean / p99", "budget (ms)", "recording overhead",
-              "poses received (Hz)", "CPU"]
-    body = []
+    wall_header = ["case", "record", "real-time factor", "poses received (Hz)", "step mean / p99",
+                   "engine mean / p99", "publish mean / p99", "record mean / p99", "budget dt",
+                   "in steps", "CPU", "load"]
+    wall = []
     for r in rows:
-        body.append([
-            r["case"], "yes" if r["record"] else "no", _f(r["rtf"]),
+        wall.append([
+            _label(r), "yes" if r["record"] else "no", _f(r["rtf"]), _f(r["poses_received_hz"], 0),
             f"{_f(r['step_mean_ms'])} / {_f(r['step_p99_ms'])}",
             f"{_f(r['engine_mean_ms'])} / {_f(r['engine_p99_ms'])}",
             f"{_f(r['publish_mean_ms'])} / {_f(r['publish_p99_ms'])}",
             f"{_f(r['record_mean_ms'])} / {_f(r['record_p99_ms'])}" if r["record"] else "—",
-            _f(r["dt_ms"]), _pct(r["record_overhead_share"]) if r["record"] else "—",
-            _f(r["poses_received_hz"], 0), f"{100 * r['cpu_share']:.0f} %",
+            _f(r["dt_ms"]), f"{100 * r['busy_share']:.0f} %", f"{100 * r['cpu_share']:.0f} %",
+            _f(r.get("load_average"), 1),
         ])
-    lines = ["# Node real time: step, publish and recording cost", "",
-             f"Machine: {machine_line}. Each row: {seconds:g} s of wall time at real_time_factor 1, "
-             "every output published every step, after a warm-up. Regenerate with "
-             "`physics-bench node` (`--quick`: 5 s per row).", "",
-             table(header, body), "", "## Reading", ""]
+    cpu_header = ["case", "record", "step", "engine", "publish", "per message (µs)", "record",
+                  "record share of step", "recording overhead (of step / of dt)", "MCAP written (MB/s)"]
+    cpu = []
+    for r in rows:
+        rec = r["record"]
+        cpu.append([
+            _label(r), "yes" if rec else "no", _f(r["step_cpu_ms"]), _f(r["engine_cpu_ms"]),
+            _f(r["publish_cpu_ms"]), _f(1e3 * r["publish_cpu_ms"] / messages_per_step(r), 1),
+            _f(r["record_cpu_ms"]) if rec else "—",
+            _pct(r["record_cpu_ms"] / r["step_cpu_ms"]) if rec else "—",
+            f"{_pct(r['record_overhead_cpu_share'])} / {_pct(r['record_overhead_cpu_ms'] / r['dt_ms'])}"
+            if rec and r["record_overhead_cpu_ms"] is not None else "—",
+            _f(r["recording_mb_per_s"], 1) if rec else "—",
+        ])
+    align = "ll" + "r" * 20
+    lines = [
+        "# Node real time: step, publish and recording cost", "",
+        f"Machine: {machine_line}. Each row: {seconds:g} s of wall time at real_time_factor 1, every output "
+        "published every step, after a warm-up. Regenerate with `physics-bench node` (`--quick`: 5 s per row).",
+        "", "## Real time (wall clock, ms)", "",
+        table(wall_header, wall, align=align[: len(wall_header)]),
+        "## Cost per step (CPU time of the node's thread, mean, ms)", "",
+        "CPU time is not inflated by other load on the machine; the recording share is the recorder's "
+        "part of the recorded step, the overhead the difference between the recorded and unrecorded step.", "",
+        table(cpu_header, cpu, align=align[: len(cpu_header)]),
+        "## Reading", "",
+    ]
     lines += [f"- {line}" for line in reading(rows)]
     lines += ["", "## Method", "", __doc__.split("\n\n", 2)[2].strip(), ""]
     return "\n".join(lines)
 
 
 def reading(rows):
-    """One line per case: did it hold real time, and where the step went."""
+    """One line per row: did it hold real time, and where the step went."""
     out = []
     for r in rows:
-        held = r["rtf"] >= 0.99
-        what = "holds real time" if held else f"misses real time: factor {r['rtf']:.2f}"
-        step, budget = r["step_mean_ms"], r["dt_ms"]
-        parts = [f"engine {r['engine_mean_ms'] / step:.0%}", f"publish {r['publish_mean_ms'] / step:.0%}"]
+        held = r["rtf"] >= 0.98
+        what = "holds real time" if held else f"misses real time (factor {r['rtf']:.2f})"
+        step, budget = r["step_cpu_ms"], r["dt_ms"]
+        parts = [f"engine {r['engine_cpu_ms']:.3f}", f"publish {r['publish_cpu_ms']:.3f}"]
         if r["record"]:
-            parts.append(f"record {r['record_mean_ms'] / step:.0%}")
-        line = (f"{r['case']}{' with record' if r['record'] else ''}: {what}; the mean step takes "
-                f"{step:.3f} ms of a {budget:.3f} ms budget ({step / budget:.0%}; {', '.join(parts)})")
-        if r["record"] and r["record_overhead_share"] is not None:
-            ok = "under" if r["record_overhead_share"] < RECORD_TARGET else "over"
-            line += (f"; recording adds {r['record_overhead_ms']:.3f} ms, "
-                     f"{r['record_overhead_share']:.1%} of the step ({ok} the 10 % target)")
+            parts.append(f"record {r['record_cpu_ms']:.3f}")
+        line = (f"{_label(r)}{', record' if r['record'] else ''}: {what}; a step costs {step:.3f} ms of CPU "
+                f"against a {budget:.3f} ms budget ({step / budget:.0%}: {', '.join(parts)} ms)")
+        if r["engine_cpu_ms"] > budget:
+            line += f"; the engine step alone is {r['engine_cpu_ms'] / budget:.1f}× the budget"
+        if r["contacts_at_end"]:
+            line += f"; {r['contacts_at_end']} contact events in the last step"
+        if r["record"]:
+            share = r["record_cpu_ms"] / step
+            ok = "under" if share < RECORD_TARGET else "over"
+            line += (f"; recording takes {share:.0%} of the step ({ok} the 10 % target), "
+                     f"writing {r['recording_mb_per_s']:.1f} MB/s of MCAP")
+        if r.get("listener_ready") is False:
+            line += "; the ~/poses subscriber never matched"
         out.append(line + ".")
     return out
 
@@ -471,13 +529,15 @@ def main(argv=None):
     p.add_argument("--seconds", type=float, default=None, help="wall seconds per row")
     p.add_argument("--only", nargs="+", metavar="CASE", help="case names or scene kinds to run")
     p.add_argument("--no-listener", action="store_true", help="no subscriber process on ~/poses")
+    p.add_argument("--executor", choices=("single", "events"), default="single",
+                   help="rclpy executor: single (as physics-node) or the experimental events executor")
     p.add_argument("--listen", metavar="TOPIC", help=argparse.SUPPRESS)
     args = p.parse_args(argv)
     if args.listen:
         return listen(args.listen)
     from .results_io import DEFAULT_OUT
     run(quick=args.quick, out_dir=os.path.abspath(args.out or DEFAULT_OUT), seconds=args.seconds,
-        only=args.only, listener=not args.no_listener)
+        only=args.only, listener=not args.no_listener, executor=args.executor)
     return 0
 
 
