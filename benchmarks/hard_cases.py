@@ -11,7 +11,10 @@ by the contact tests; here each case must only stay *stable*:
   than ENERGY_GAIN_LIMIT of the energy that moved during the run (plus the
   energy of lifting every body by LIFT_FLOOR, so that a scene at rest is not
   judged on the micro-joules of its position correction);
-- nothing flies off: every body stays within ESCAPE_RADIUS of the origin.
+- nothing flies off: every body stays within ESCAPE_RADIUS of the origin;
+- nothing tunnels: no body's centre crosses a static box from one side of
+  its thinnest axis to the other within the box's face (a wall or a floor
+  slab is never passed through).
 """
 import glob
 import os
@@ -66,6 +69,7 @@ class HardCaseResult:
     max_penetration: float = 0.0       # of the body's smallest half size
     energy_gain: float = 0.0           # of the energy that moved
     max_distance: float = 0.0          # m from the origin
+    crossed: list = field(default_factory=list)   # (body, static box) pairs that tunnelled
     seconds: float = 0.0
     cpu_per_sim_second: float = 0.0
     notes: list = field(default_factory=list)
@@ -82,7 +86,49 @@ class HardCaseResult:
                        f"(limit {ENERGY_GAIN_LIMIT})")
         if self.max_distance > ESCAPE_RADIUS:
             out.append(f"a body flew {self.max_distance:.3g} m away")
+        if self.crossed:
+            out.append("passed through a static box: "
+                       + ", ".join(f"{a} through {b}" for a, b in self.crossed))
         return out
+
+
+class WallCrossing:
+    """Which side of each static box's thinnest axis every dynamic body is on."""
+
+    def __init__(self, model, state):
+        self.model = model
+        self.walls = np.flatnonzero(model.is_static & (model.shape_type == BOX))
+        self.bodies = np.flatnonzero(~model.is_static)
+        self.side0 = self._sides(state) if len(self.walls) else None
+
+    def _local(self, state):
+        out = []
+        for w in self.walls:
+            d = state.pos[self.bodies] - state.pos[w]
+            q = np.broadcast_to(state.quat[w], (len(self.bodies), 4))
+            out.append(qt.rotate_inverse(q, d))
+        return np.array(out)                                   # (walls, bodies, 3)
+
+    def _sides(self, state):
+        local = self._local(state)
+        axis = np.argmin(self.model.half_extents[self.walls], axis=1)
+        return np.sign(np.take_along_axis(local, axis[:, None, None], axis=2)[..., 0])
+
+    def crossed(self, state):
+        """[(body name, wall name)] that are now on the other side, within the face."""
+        if self.side0 is None:
+            return []
+        m = self.model
+        local = self._local(state)
+        h = m.half_extents[self.walls]
+        axis = np.argmin(h, axis=1)
+        side = np.sign(np.take_along_axis(local, axis[:, None, None], axis=2)[..., 0])
+        inside_face = np.ones(side.shape, dtype=bool)
+        for k in range(3):
+            other = axis != k
+            inside_face &= ~other[:, None] | (np.abs(local[..., k]) <= h[:, None, k])
+        bad = (side * self.side0 < 0) & inside_face
+        return [(m.names[self.bodies[j]], m.names[self.walls[i]]) for i, j in zip(*np.nonzero(bad))]
 
 
 def _plane_penetration(model, state):
@@ -115,10 +161,14 @@ def run(case, quick=True, duration=None):
     r = HardCaseResult(case.name, case.bodies, steps)
     e0 = world.energy()
     e_max, e_min, ke_max = e0, e0, world.kinetic_energy()
+    walls = WallCrossing(world.model, world.state)
     t0 = perf_counter()
     try:
         for _ in range(0, steps, SAMPLE):
             world.step(SAMPLE)
+            for pair in walls.crossed(world.state):
+                if pair not in r.crossed:
+                    r.crossed.append(pair)
             e = world.energy()
             e_max, e_min = max(e_max, e), min(e_min, e)
             ke_max = max(ke_max, world.kinetic_energy())

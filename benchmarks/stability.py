@@ -143,7 +143,8 @@ def report(data):
             f"Each scene run {hard_cases.DURATION[data['quick']]:g} s. Pass: finite; "
             f"penetration into a plane ≤ {hard_cases.PENETRATION_LIMIT} of the body's smallest "
             f"half size; energy rise ≤ {hard_cases.ENERGY_GAIN_LIMIT} of the energy that moved; "
-            f"nothing beyond {hard_cases.ESCAPE_RADIUS:g} m.\n")
+            f"nothing beyond {hard_cases.ESCAPE_RADIUS:g} m; no body through a static box "
+            "(its centre never crosses to the other side of the box's thinnest axis).\n")
         parts.append(md.table(
             ["case", "bodies", "steps", "max penetration / size", "energy rise", "CPU s / sim s",
              "result"],
