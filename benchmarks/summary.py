@@ -52,6 +52,9 @@ def build(out, prefix="", level=2):
         "Times are CPU seconds of `world.step` on the machine named in each table, best of "
         "several timed chunks.\n",
     ]
+    short = _in_short(out)
+    if short:
+        parts.append(short)
     for title, fn in (("Accuracy of the integrators", _accuracy), ("Contacts", _contacts),
                       ("Stability", _stability), ("Scale", _scale), ("Cost of each effect", _effects)):
         parts.append(f"{h} {title}\n")
@@ -79,6 +82,37 @@ def _accuracy(out, prefix, level):
              "Per problem: " + ", ".join(f"[{p.title.lower()}]({prefix}accuracy_{p.key}.png)"
                                          for p in problems) + ".\n"]
     return "\n".join(lines)
+
+
+def _in_short(out):
+    """One paragraph: which integrator for which error, from the latest accuracy and contact runs."""
+    acc = read_json(out, "accuracy.json")
+    if not acc:
+        return ""
+    lines = []
+    for target in TARGETS:
+        wins = {}
+        for key, rd in acc["reading"].items():
+            best = rd[f"{target:g}"]["best"]
+            if best:
+                wins[best] = wins.get(best, 0) + 1
+        if wins:
+            ranked = sorted(wins, key=lambda k: -wins[k])
+            lines.append(f"error ≤ {target:g}: {LABELS[ranked[0]]}"
+                         + (f" (or {', '.join(LABELS[k] for k in ranked[1:])} on some problems)"
+                            if len(ranked) > 1 else ""))
+    con = read_json(out, "contacts.json")
+    if con and con.get("bounce"):
+        base = [r for r in con["bounce"] if r["substeps"] == 1]
+        counts = {}
+        for dt in {r["dt"] for r in base}:
+            w = min((r for r in base if r["dt"] == dt), key=lambda r: r["error"])["integrator"]
+            counts[w] = counts.get(w, 0) + 1
+        best = max(counts, key=counts.get)
+        n_dts = len({r["dt"] for r in base})
+        lines.append(f"with contacts: {LABELS[best]} (most accurate bounces at "
+                     f"{counts[best]} of {n_dts} step sizes)")
+    return "**In short** — for this error, use that: " + "; ".join(lines) + ".\n"
 
 
 def _order_reading(problems, data):
@@ -173,7 +207,8 @@ def _contacts(out, prefix, level):
             f"{best['error']:.2g} h₀ ({LABELS[best['integrator']]}, dt = 1/{round(1 / best['dt'])} s"
             f"{', ×' + str(best['substeps']) + ' sub-steps' if best['substeps'] > 1 else ''}); at the "
             "finest dt: " + ", ".join(f"{LABELS[k]} {v['error']:.2g}" for k, v in per.items())
-            + f".\n\n![bounce]({prefix}contacts_bounce.png)\n")
+            + ". " + _bounce_reading(data["bounce"])
+            + f"\n\n![bounce]({prefix}contacts_bounce.png)\n")
     toi = data["toi"]
     off = [r for r in toi if not r["ccd"]]
     on = [r for r in toi if r["ccd"] and r["substeps"] == 1]
@@ -213,6 +248,44 @@ def _contacts(out, prefix, level):
                if good else "No iteration count of this grid kept every box within 1 cm.")
             + f"\n\n![stack]({prefix}contacts_stack.png)\n")
     return "\n".join(lines)
+
+
+def _bounce_reading(rows):
+    """Which integrator is most accurate at each dt, and who bounces higher than C_R allows."""
+    from .contact_scenes import bounce_apexes_exact
+    exact = bounce_apexes_exact()
+    base = [r for r in rows if r["substeps"] == 1]
+    winners = {}
+    for dt in sorted({r["dt"] for r in base}, reverse=True):
+        at = [r for r in base if r["dt"] == dt]
+        winners[dt] = min(at, key=lambda r: r["error"])["integrator"]
+    kinds = set(winners.values())
+    text = (f"{_cap(LABELS[kinds.pop()])} is the most accurate at every dt of the grid"
+            if len(kinds) == 1 else "Most accurate per dt: " + ", ".join(
+                f"1/{round(1 / dt)} s {LABELS[w]}" for dt, w in winners.items()))
+    coarse = max(r["dt"] for r in base)
+    high = []
+    for integ in INTEGRATORS:
+        mine = sorted((r for r in base if r["integrator"] == integ), key=lambda r: -r["dt"])
+        r = next((r for r in mine if r["dt"] < coarse), None)     # the second coarsest, 1/60 s
+        if r and len(r["apexes"]) == len(exact) and all(a > e + 0.01 for a, e in
+                                                          zip(r["apexes"][1:], exact[1:])):
+            high.append((integ, r))
+    if high:
+        # the apexes of velocity Verlet if it is among them: explicit Euler is expected to gain
+        integ, r = next(((i, r) for i, r in high if i == "velocity_verlet"), high[0])
+        names = [LABELS[i] for i, _ in high]
+        text += (". " + _cap(", ".join(names[:-1]) + " and " + names[-1] if len(names) > 1 else names[0])
+                 + f" bounce higher than C_R allows at coarse steps ({LABELS[integ]} at dt = "
+                 f"1/{round(1 / r['dt'])} s: "
+                 + ", ".join(f"{a:.2f}" for a in r["apexes"]) + " m against "
+                 + ", ".join(f"{e:.2f}" for e in exact)
+                 + " m): each bounce keeps more than C_R² of the energy")
+    return text + "."
+
+
+def _cap(text):
+    return text[:1].upper() + text[1:]
 
 
 def _bold_fail(verdict):
