@@ -8,8 +8,6 @@ simulated second, fits the convergence order, and writes
 (error against step size, and error against cost), plus
 `accuracy_overview.png` (all work–precision panels in one figure).
 """
-import math
-
 from physics_core import load_scene
 
 from . import markdown as md
@@ -201,12 +199,3 @@ def plot_overview(problems, rows, orders, path):
     axes[0].set_ylabel("relative error")
     axes[0].legend(fontsize=7)
     plotting.save(fig, path)
-
-
-def best_for(data, problem_key, target):
-    rd = data["reading"][problem_key].get(f"{target:g}")
-    return None if rd is None else rd["best"]
-
-
-def is_nan(x):
-    return isinstance(x, float) and math.isnan(x)

@@ -22,7 +22,7 @@ from . import markdown as md
 from . import plotting
 from .accuracy import LABELS
 from .contact_support import available, skipped
-from .orders import cost_for_error, fit_order
+from .orders import fit_order
 from .problems import INTEGRATORS
 from .progress import Progress
 from .results_io import machine, write_json, write_text
@@ -321,20 +321,3 @@ def plot_stack(data, path):
     ax_c.set_ylabel("max drift of a box (m)")
     ax_c.set_title("Stack: drift against cost")
     plotting.save(fig, path)
-
-
-def cheapest_stable_iterations(data, limit=0.01):
-    """Fewest solver iterations whose stack drift stays under `limit` m (None if none)."""
-    for r in data.get("stack", []):
-        if r["finite"] and r["max_drift"] <= limit:
-            return r
-    return None
-
-
-def bounce_cost(data, target):
-    out = {}
-    for integ in INTEGRATORS:
-        mine = [r for r in data["bounce"] if r["integrator"] == integ]
-        out[integ] = cost_for_error([r["cpu_per_sim_second"] for r in mine],
-                                    [r["error"] for r in mine], target)
-    return out
