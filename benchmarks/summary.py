@@ -59,7 +59,22 @@ def build(out, prefix="", level=2):
                       ("Stability", _stability), ("Scale", _scale), ("Cost of each effect", _effects)):
         parts.append(f"{h} {title}\n")
         parts.append(fn(out, prefix, level + 1))
+    others = _other_tables(out)
+    if others:
+        parts.append(f"{h} Other results\n")
+        parts.append(" · ".join(f"[{name}]({prefix}{name})" for name in others) + "\n")
     return "\n".join(parts)
+
+
+OWN_TABLES = {"accuracy.md", "contacts.md", "stability.md", "scale.md", "effects.md",
+              "README_results.md"}
+
+
+def _other_tables(out):
+    """Tables other studies wrote into the same folder (linked, not restated)."""
+    if not os.path.isdir(out):
+        return []
+    return sorted(f for f in os.listdir(out) if f.endswith(".md") and f not in OWN_TABLES)
 
 
 # ---- accuracy -------------------------------------------------------------------
