@@ -38,7 +38,7 @@ from .outputs import Outputs
 from .pacing import StepPacer
 from .parameters import ParameterValueError, coerce, declare
 from .qos import COMMANDS, per_body_events
-from .recorder import SCENE_MEDIA_TYPE, SESSION_METADATA, Recorder
+from .recorder import SCENE_MEDIA_TYPE, SESSION_METADATA, Recorder, chunk_size_for
 from .session import engine_version, session_metadata
 from .stepping import Stepper
 
@@ -75,7 +75,11 @@ class PhysicsNode(Node):
 
         self.recorder = None
         if self.settings.record:
-            self.recorder = Recorder(self.settings.record, library=f"physics_node {engine_version()}").open()
+            self.recorder = Recorder(
+                self.settings.record,
+                chunk_size=chunk_size_for(len(self.model.names)),
+                library=f"physics_node {engine_version()}",
+            ).open()
         try:
             self._connect()
         except BaseException:

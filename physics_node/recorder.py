@@ -15,9 +15,9 @@ process killed outright loses at most that last chunk.
 import os
 import struct
 import time
-from itertools import chain
 
 import mcap
+import numpy as np
 from mcap.opcode import Opcode
 from mcap.records import MessageIndex
 from mcap.writer import CompressionType, Writer
@@ -39,30 +39,52 @@ EVENTS_SUFFIX = "/events"
 RESET_EVENT = "reset"
 
 
-# A Message record's opcode, length and fields up to its data.
-_MESSAGE_HEAD = struct.Struct("<BQHIQQ")
-_MESSAGE_FIELDS_BYTES = _MESSAGE_HEAD.size - 9  # channel id, sequence, log and publish time
+# A Message record up to its data: opcode, record length, channel id,
+# sequence, log time, publish time (little endian, unpadded).
+_MESSAGE_HEAD = np.dtype(
+    [("opcode", "u1"), ("length", "<u8"), ("channel", "<u2"), ("sequence", "<u4"), ("log", "<u8"), ("publish", "<u8")]
+)
+_MESSAGE_HEAD_STRUCT = struct.Struct("<BQHIQQ")
+_MESSAGE_FIELDS_BYTES = _MESSAGE_HEAD.itemsize - 9  # the record length counts what follows opcode and length
+_SMALL_BATCH = 8
+
+
+# Chunk size: 1 MiB, or room for about ten steps of a large scene, so that
+# each channel's per-chunk MessageIndex record covers several messages (a
+# scene of a thousand bodies writes a thousand odometry channels per step).
+CHUNK_SIZE = 1 << 20
+MAX_CHUNK_SIZE = 16 << 20
+CHUNK_BYTES_PER_BODY = 10 << 10
+
+
+def chunk_size_for(bodies):
+    return int(min(MAX_CHUNK_SIZE, max(CHUNK_SIZE, CHUNK_BYTES_PER_BODY * int(bodies))))
 
 
 class RecorderError(RuntimeError):
     pass
 
 
-class _PackedMessageIndex(MessageIndex):
-    """A chunk's MessageIndex record (one per channel and chunk), packed in
-    one call rather than written field by field and entry by entry."""
+class _ChunkIndex(MessageIndex):
+    """One channel's MessageIndex record for the chunk in progress; its
+    entries are kept by the appender for all channels at once and packed
+    when mcap's Writer writes the record (after the chunk)."""
+
+    def __init__(self, channel_id, appender):  # the dataclass's fields, without its __init__'s cost
+        self.channel_id, self.records, self._appender = channel_id, [], appender
 
     def write(self, stream):
-        n = len(self.records)
-        head = (Opcode.MESSAGE_INDEX, 6 + 16 * n, self.channel_id, 16 * n)
-        stream.write(struct.pack(f"<BQHI{2 * n}Q", *head, *chain.from_iterable(self.records)))
+        stream.write(self._appender.index_record(self.channel_id))
 
 
 class _ChunkAppender:
-    """Appends Message records to the chunk mcap's Writer is building, many
-    at a time, keeping the writer's statistics and the chunk's message
-    indexes as `Writer.add_message` does (one record object and about twenty
-    small writes per message otherwise).
+    """Appends Message records to the chunk mcap's Writer is building, a
+    step's messages at a time: their headers built with numpy, one write, and
+    the chunk's message indexes and the writer's statistics kept as
+    `Writer.add_message` keeps them (one record object and about twenty small
+    writes per message otherwise). The records are the ones `add_message`
+    writes; a batch is not split between chunks, so a chunk may close a few
+    messages later than it would one message at a time.
 
     This relies on how mcap's Writer keeps its chunk; `attach` returns None
     when the installed mcap does not look that way, and the recorder then
@@ -70,9 +92,16 @@ class _ChunkAppender:
 
     def __init__(self, builder, statistics, maybe_finalize):
         self._builder, self._statistics, self._maybe_finalize = builder, statistics, maybe_finalize
+        self._channels = {}  # tuple of channel ids -> the same as an array
         # Messages per channel are counted per batch of channels and added to
         # the statistics in `settle`, before the summary is written.
         self._batches = {}
+        self._new_chunk()
+
+    def _new_chunk(self):
+        self._log = []  # (channel ids, offsets in the chunk, log time) per batch
+        self._indexed = set()  # batches whose channels have an index record in this chunk
+        self._index = None  # channel id -> packed MessageIndex record, once the chunk is done
 
     @classmethod
     def attach(cls, writer):
@@ -92,24 +121,50 @@ class _ChunkAppender:
 
     def add(self, channel_ids, datas, time_ns, sequence):
         """Message records at one time and sequence number; returns how many."""
-        channel_ids = tuple(channel_ids)
-        n = len(channel_ids)
+        ids = tuple(channel_ids)
+        n = len(ids)
         if not n:
             return 0
         builder, stats = self._builder, self._statistics
+        if builder.num_messages == 0:  # the writer closed the last chunk (or none yet)
+            self._new_chunk()
+        channels = self._channels.get(ids)
+        if channels is None:
+            channels = self._channels[ids] = np.array(ids, dtype=np.uint16)
         buffer = builder.record_writer._buffer
-        offset = buffer.tell()
-        index_of, new_index = builder.message_indices.get, self._new_index
-        entries = [(index_of(c) or new_index(c)).records for c in channel_ids]
-        pack, head_bytes, opcode = _MESSAGE_HEAD.pack, _MESSAGE_HEAD.size, int(Opcode.MESSAGE)
-        parts = []
-        for channel_id, data, records in zip(channel_ids, datas, entries):
-            size = len(data)
-            records.append((time_ns, offset))
-            parts += (pack(opcode, _MESSAGE_FIELDS_BYTES + size, channel_id, sequence, time_ns, time_ns), data)
-            offset += head_bytes + size
+        start = buffer.tell()
+        if n < _SMALL_BATCH:  # numpy's fixed cost is more than packing a few headers
+            pack, offsets, at, parts = _MESSAGE_HEAD_STRUCT.pack, [], start, []
+            for channel_id, data in zip(ids, datas):
+                size = len(data)
+                offsets.append(at)
+                head = pack(Opcode.MESSAGE, _MESSAGE_FIELDS_BYTES + size, channel_id, sequence, time_ns, time_ns)
+                parts += (head, data)
+                at += _MESSAGE_HEAD.itemsize + size
+            offsets = np.array(offsets, dtype=np.int64)
+        else:
+            sizes = np.fromiter(map(len, datas), dtype=np.int64, count=n)
+            heads = np.empty(n, dtype=_MESSAGE_HEAD)
+            heads["opcode"] = Opcode.MESSAGE
+            heads["length"] = _MESSAGE_FIELDS_BYTES + sizes
+            heads["channel"] = channels
+            heads["sequence"] = sequence
+            heads["log"] = heads["publish"] = time_ns
+            head_bytes, step = heads.tobytes(), _MESSAGE_HEAD.itemsize
+            parts = [b""] * (2 * n)
+            parts[0::2] = [head_bytes[i : i + step] for i in range(0, n * step, step)]
+            parts[1::2] = datas
+            record_sizes = step + sizes
+            offsets = start + np.cumsum(record_sizes) - record_sizes
         buffer.write(b"".join(parts))
-        self._batches[channel_ids] = self._batches.get(channel_ids, 0) + 1
+        self._log.append((channels, offsets, time_ns))
+        if ids not in self._indexed:
+            indices = builder.message_indices
+            for channel_id in ids:
+                if channel_id not in indices:
+                    indices[channel_id] = _ChunkIndex(channel_id, self)
+            self._indexed.add(ids)
+        self._batches[ids] = self._batches.get(ids, 0) + 1
         if builder.num_messages == 0:
             builder.message_start_time = time_ns
         else:
@@ -125,9 +180,23 @@ class _ChunkAppender:
         self._maybe_finalize()
         return n
 
-    def _new_index(self, channel_id):
-        index = self._builder.message_indices[channel_id] = _PackedMessageIndex(channel_id=channel_id, records=[])
-        return index
+    def index_record(self, channel_id):
+        """The MessageIndex record of `channel_id` for the chunk just closed:
+        its (log time, offset) entries in the order the messages were added."""
+        if self._index is None:
+            channels = np.concatenate([c for c, _, _ in self._log])
+            entries = np.empty((len(channels), 2), dtype="<u8")
+            entries[:, 0] = np.concatenate([np.full(len(c), t, dtype=np.uint64) for c, _, t in self._log])
+            entries[:, 1] = np.concatenate([o for _, o, _ in self._log])
+            order = np.argsort(channels, kind="stable")
+            channels, entries = channels[order], entries[order]
+            ids, starts = np.unique(channels, return_index=True)
+            ends = np.append(starts[1:], len(channels))
+            self._index = {}
+            for c, a, b in zip(ids.tolist(), starts.tolist(), ends.tolist()):
+                body = entries[a:b].tobytes()
+                self._index[c] = struct.pack("<BQHI", Opcode.MESSAGE_INDEX, 6 + len(body), c, len(body)) + body
+        return self._index[channel_id]
 
     def settle(self):
         """Add the per-channel message counts to the writer's statistics."""
@@ -142,7 +211,7 @@ class Recorder:
     """Writes one session. Use as a context manager; `close()` is idempotent
     and is what makes the file complete (summary, statistics, indexes)."""
 
-    def __init__(self, path, *, chunk_size=1 << 20, flush_period=1.0, library="physics_node"):
+    def __init__(self, path, *, chunk_size=CHUNK_SIZE, flush_period=1.0, library="physics_node"):
         self.path = os.fspath(path)
         self._chunk_size = chunk_size
         self._flush_period = flush_period
