@@ -346,6 +346,7 @@ def measure(case, record, seconds, workdir, listener=True, executor="single"):
         received, listen_s = watcher.finish() if watcher is not None else (None, None)
         watcher = None
         messages = node.recorder.message_count if node.recorder is not None else None
+        steps_total = node.world.step_index
     finally:
         if watcher is not None:
             watcher.finish()
@@ -382,6 +383,7 @@ def measure(case, record, seconds, workdir, listener=True, executor="single"):
     row["listener_ready"] = ready
     row["poses_received_hz"] = received / listen_s if received is not None and listen_s else None
     row["recording_mb_per_s"] = size / 1e6 / wall if size is not None else None
+    row["recording_kb_per_step"] = size / 1e3 / max(steps_total, 1) if size is not None else None
     row["recorded_messages"] = messages
     row["load_average"] = os.getloadavg()[0]
     return row
@@ -464,7 +466,7 @@ def markdown(rows, seconds, machine_line):
             _f(r.get("load_average"), 1),
         ])
     cpu_header = ["case", "record", "step", "engine", "publish", "per message (µs)", "record",
-                  "record share of step", "recording overhead (of step / of dt)", "MCAP written (MB/s)"]
+                  "record share of step", "recording overhead (of step / of dt)", "MCAP per step (kB)"]
     cpu = []
     for r in rows:
         rec = r["record"]
@@ -475,7 +477,7 @@ def markdown(rows, seconds, machine_line):
             _pct(r["record_cpu_ms"] / r["step_cpu_ms"]) if rec else "—",
             f"{_pct(r['record_overhead_cpu_share'])} / {_pct(r['record_overhead_cpu_ms'] / r['dt_ms'])}"
             if rec and r["record_overhead_cpu_ms"] is not None else "—",
-            _f(r["recording_mb_per_s"], 1) if rec else "—",
+            _f(r["recording_kb_per_step"], 1) if rec else "—",
         ])
     align = "ll" + "r" * 20
     lines = [
@@ -485,8 +487,10 @@ def markdown(rows, seconds, machine_line):
         "", "## Real time (wall clock, ms)", "",
         table(wall_header, wall, align=align[: len(wall_header)]),
         "## Cost per step (CPU time of the node's thread, mean, ms)", "",
-        "CPU time is not inflated by other load on the machine; the recording share is the recorder's "
-        "part of the recorded step, the overhead the difference between the recorded and unrecorded step.", "",
+        "CPU time counts only the node's own thread, so it is much less inflated than wall time by other "
+        "load on the machine (not entirely: shared caches and cores). The recording share is the "
+        "recorder's part of the recorded step; the overhead is the difference between the recorded and "
+        "unrecorded rows.", "",
         table(cpu_header, cpu, align=align[: len(cpu_header)]),
         "## Reading", "",
     ]
@@ -515,7 +519,7 @@ def reading(rows):
             share = r["record_cpu_ms"] / step
             ok = "under" if share < RECORD_TARGET else "over"
             line += (f"; recording takes {share:.0%} of the step ({ok} the 10 % target), "
-                     f"writing {r['recording_mb_per_s']:.1f} MB/s of MCAP")
+                     f"{r['recording_kb_per_step']:.1f} kB of MCAP per step")
         if r.get("listener_ready") is False:
             line += "; the ~/poses subscriber never matched"
         out.append(line + ".")
