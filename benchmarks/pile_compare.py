@@ -16,7 +16,10 @@ one of them; the wall time is logged too); with `--repeat R` each run is
 made R times and the fastest kept. An engine that has not finished its
 steps within `--budget` wall seconds stops there and is reported over the
 steps it did (marked `*`: an early part of the run, the fall, is cheaper
-than the pile). PyBullet and MuJoCo are optional: a missing one is a column
+than the pile); one whose cost at the previous size, scaled linearly with
+the bodies, projects beyond 3 budgets is not started at all (a single step
+of a native engine cannot be interrupted: MuJoCo's default Newton solver
+takes minutes per step on the 10,000-sphere pile). PyBullet and MuJoCo are optional: a missing one is a column
 of "not installed".
 
 Prints a Markdown table with steps/s and the ratios, then where this
@@ -41,6 +44,7 @@ LAYERS = 10
 JITTER = 0.01
 SEED = 0
 OTHERS = ("pybullet", "mujoco")
+SKIP_FACTOR = 3.0       # an engine projected to need more than this × budget at a size is not run
 
 
 def pile(n, radius=RADIUS, spacing=SPACING, layers=LAYERS, seed=SEED):
@@ -63,11 +67,14 @@ def time_engine(engine, bodies, steps, budget):
         warnings.simplefilter("ignore", UserWarning)
         step, _, stages = engines.build(engine, bodies)
     done, t0, c0 = 0, perf_counter(), process_time()
-    chunk = max(1, steps // 24)
-    while done < steps and perf_counter() - t0 < budget:
+    chunk = 1                      # grown while a chunk takes under a second, so a slow
+    while done < steps and perf_counter() - t0 < budget:   # engine still meets the budget
         k = min(chunk, steps - done)
+        c = perf_counter()
         step(k)
         done += k
+        if perf_counter() - c < 0.5:
+            chunk = min(2 * chunk, max(1, steps // 24))
     return done, process_time() - c0, perf_counter() - t0, stages()
 
 
@@ -75,6 +82,7 @@ def run(sizes=SIZES, steps=None, budget=BUDGET, quick=False, log=print, others=O
     """One row per size: steps/s of each engine and how they compare."""
     steps = steps or (QUICK_STEPS if quick else STEPS)
     rows, profiles = [], {}
+    per_step = {}          # engine -> (bodies, CPU s per step) at the last size run
     for n in sizes:
         bodies = pile(n)
         row = {"spheres": n, "steps": steps}
@@ -83,6 +91,16 @@ def run(sizes=SIZES, steps=None, budget=BUDGET, quick=False, log=print, others=O
             if not installed(engine):
                 row[f"{engine} steps/s"] = "not installed"
                 continue
+            if engine in per_step:
+                # an engine that would take far beyond the budget (its last size's cost,
+                # scaled linearly) is not started: one of its steps cannot be interrupted
+                n0, sec = per_step[engine]
+                projected = sec * n / n0 * steps
+                if projected > SKIP_FACTOR * budget:
+                    row[f"{engine} steps/s"] = f"not run (≥ {projected:.0f} s projected)"
+                    log(f"  {n} spheres, {engine}: not run, {projected:.0f} s projected "
+                        f"from {n0} spheres")
+                    continue
             best = None
             for _ in range(max(1, repeat)):
                 done, cpu, wall, prof = time_engine(engine, bodies, steps, budget)
@@ -93,6 +111,7 @@ def run(sizes=SIZES, steps=None, budget=BUDGET, quick=False, log=print, others=O
                 if done < steps:
                     break
             done, cpu, prof = best
+            per_step[engine] = (n, cpu / done)
             rate[engine] = done / cpu
             row[f"{engine} steps/s"] = f"{rate[engine]:.3g}" + ("" if done == steps else f"* ({done} steps)")
             if prof:

@@ -10,7 +10,8 @@
                    sleeping bodies that are touched, contact rows, colouring,
                    warm start from last substep (keyed by feature)
     solve        – warm start, then projected Gauss–Seidel on normal and
-                   friction impulses with accumulated clamping
+                   friction impulses with accumulated clamping, one graph
+                   colour (a vectorised batch) at a time
     restitution  – bounce pass from the approach speed stored before the
                    solve, zero below restitution_threshold (resting contact)
     correct      – positions follow the velocity change; remaining overlap is

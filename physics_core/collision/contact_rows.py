@@ -116,8 +116,7 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
     J = np.concatenate([-D, -_cross_rows(rA, D), D, _cross_rows(rB, D)], axis=2)
     # M = M⁻¹ Jᵀ as rows: inverse masses scale the linear columns; the angular
     # ones take I_w⁻¹, a scalar for isotropic bodies, a 3×3 product otherwise
-    inv_a = np.where(np.isfinite(inv_mass[a]), inv_mass[a], 0.0)
-    inv_b = np.where(np.isfinite(inv_mass[b]), inv_mass[b], 0.0)
+    inv_a, inv_b = inv_mass[a], inv_mass[b]
     if inv_inertia_w is None:
         scale = np.repeat(np.stack([inv_a, iso_inv[a], inv_b, iso_inv[b]], axis=1), 3, axis=1)
         M = J * scale[:, None, :]
