@@ -10,6 +10,7 @@ from physics_core.collision.narrowphase import signed_depth
 from physics_core.collision.toi import (CCD_TOLERANCE, fast_body_mask, interpolate_poses, slerp,
                                         swept_pairs, time_of_impact)
 from physics_core.scene_loader import build_model
+from physics_scenes import box, sphere
 
 DT = 1.0 / 240.0
 G = 9.81
@@ -24,18 +25,12 @@ def ground():
 
 
 def ball(name="ball", r=0.1, pos=(0, 0, 1)):
-    return {"name": name, "shape": {"type": "sphere", "radius": r}, "mass": 1.0,
-            "position": [float(x) for x in pos]}
+    return sphere(name, radius=r, position=pos)
 
 
 def brick(name, half, pos=(0, 0, 0), static=False):
-    b = {"name": name, "shape": {"type": "box", "half_extents": [float(x) for x in half]},
-         "position": [float(x) for x in pos]}
-    if static:
-        b["static"] = True
-    else:
-        b["mass"] = 1.0
-    return b
+    """A box; a static one keeps the default mass, which only gravitation would read."""
+    return box(name, half_extents=half, position=pos, **({"static": True} if static else {}))
 
 
 def ends(model):
