@@ -3,19 +3,26 @@ step's /clock, PoseArray and contact PointCloud2 (real CDR bytes from the
 `msg_adapters.cdr` builders), for 100 and 1000 bodies, with the chunk size
 the node uses for that many bodies.
 
-Columns, per step, averaged over every step of the run (chunk boundaries
-included; `close()` is shown separately):
+Each size runs twice: steps back to back (what the recorder can sustain),
+and with one dt of the node's own work between steps (1 ms for 100 bodies,
+4.167 ms for 1000: a busy loop holding the GIL, as the node's Python code
+does). Columns, per step, averaged over every step of the run (chunk
+boundaries included; `close()` is shown separately):
 
 - calling thread: wall time spent inside `write_many` (what the step pays,
   including any wait on a full chunk queue) and CPU time of that thread;
-- total CPU: CPU time of the whole process over the run and `close()`
-  (calling thread plus the chunk writer thread), i.e. the work recording
-  does, wherever it runs.
+- total CPU: CPU time of the whole process over the run and `close()`,
+  less the simulated node work (so: the calling thread's recording plus
+  the chunk writer thread), i.e. the work recording does, wherever it runs.
+
+On a shared machine the wall times after a busy loop include cold caches
+(a trivial call can take 20 µs instead of 1 µs there); compare the CPU
+columns across versions as well.
 
 A second table compresses one chunk of the 1000-body stream with each zstd
 level: ratio and speed.
 
-Run: `python -m benchmarks.recording_cost [--steps-100 N] [--steps-1000 N]`.
+Run: `python -m benchmarks.recording_cost [--steps SCALE]`.
 """
 
 import argparse
@@ -31,7 +38,7 @@ from sensor_msgs.msg import PointCloud2
 
 from msg_adapters.cdr import ContactCloudCdr, PoseArrayCdr, clock_cdr
 from msg_adapters.contacts import ContactArrays
-from physics_node import recorder as recorder_module
+from physics_node import chunk_writer
 from physics_node.qos import LATCHED, STREAM
 from physics_node.recorder import Recorder, chunk_size_for
 
@@ -77,8 +84,17 @@ def scene_stream(bodies, steps, seed=0):
     return out
 
 
-def measure(bodies, steps, directory):
-    """One recorded run; returns a row dict (µs per step unless named otherwise)."""
+def busy(seconds):
+    """The node's own work between two steps' recording, holding the GIL as
+    its Python code does."""
+    end = time.perf_counter() + seconds
+    while time.perf_counter() < end:
+        pass
+
+
+def measure(bodies, steps, directory, work_us=0.0):
+    """One recorded run, with `work_us` of the node's own work between
+    steps; returns a row dict (µs per step unless named otherwise)."""
     stream = scene_stream(bodies, steps)
     path = os.path.join(directory, f"cost-{bodies}.mcap")
     rec = Recorder(path, chunk_size=chunk_size_for(bodies)).open()
@@ -87,31 +103,35 @@ def measure(bodies, steps, directory):
         rec.channel("/physics/poses", PoseArray, STREAM),
         rec.channel("/physics/contacts", PointCloud2, STREAM),
     ]
-    write_many = rec.write_many
-    wall = 0.0
-    worst = 0.0
-    cpu0, thread0 = time.process_time(), time.thread_time()
+    write_many, clock, thread_clock = rec.write_many, time.perf_counter, time.thread_time
+    wall = call_cpu = worst = 0.0
+    work = work_us * 1e-6
+    cpu0, thread0 = time.process_time(), thread_clock()
     for step, (t, datas) in enumerate(stream):
-        a = time.perf_counter()
+        c, a = thread_clock(), clock()
         write_many(ids, datas, t, step)
-        b = time.perf_counter() - a
+        b = clock() - a
+        call_cpu += thread_clock() - c
         wall += b
         worst = max(worst, b)
-    thread_cpu = time.thread_time() - thread0
-    a = time.perf_counter()
+        if work:
+            busy(work)
+    work_cpu = thread_clock() - thread0 - call_cpu
+    a = clock()
     rec.close()
-    close_s = time.perf_counter() - a
-    total_cpu = time.process_time() - cpu0
+    close_s = clock() - a
+    total_cpu = time.process_time() - cpu0 - work_cpu
     raw = sum(len(d) for _, datas in stream for d in datas)
     size = os.path.getsize(path)
     os.remove(path)
     return {
         "bodies": bodies,
+        "work_us": work_us,
         "steps": steps,
         "bytes_per_step": raw / steps,
         "call_wall_us": 1e6 * wall / steps,
         "call_max_us": 1e6 * worst,
-        "call_cpu_us": 1e6 * thread_cpu / steps,
+        "call_cpu_us": 1e6 * call_cpu / steps,
         "total_cpu_us": 1e6 * total_cpu / steps,
         "close_ms": 1e3 * close_s,
         "ratio": raw / size,
@@ -137,11 +157,11 @@ def zstd_levels(bodies=1000, levels=(-3, -1, 1, 2, 3, 5)):
 
 
 def markdown(rows, levels):
-    level = getattr(recorder_module, "ZSTD_LEVEL", 3)
-    head = ["bodies", "bytes/step", "calling thread µs/step", "worst call µs", "calling thread CPU µs/step",
+    level = chunk_writer.ZSTD_LEVEL
+    head = ["bodies", "node work µs/step", "bytes/step", "calling thread µs/step", "worst call µs", "calling thread CPU µs/step",
             "total CPU µs/step", "close ms", "ratio"]
     body = [
-        [r["bodies"], f"{r['bytes_per_step']:.0f}", f"{r['call_wall_us']:.1f}", f"{r['call_max_us']:.0f}",
+        [r["bodies"], f"{r['work_us']:.0f}", f"{r['bytes_per_step']:.0f}", f"{r['call_wall_us']:.1f}", f"{r['call_max_us']:.0f}",
          f"{r['call_cpu_us']:.1f}", f"{r['total_cpu_us']:.1f}", f"{r['close_ms']:.1f}", f"{r['ratio']:.2f}"]
         for r in rows
     ]
@@ -152,18 +172,22 @@ def markdown(rows, levels):
     return text
 
 
-def run(steps_100=3000, steps_1000=600):
+# (bodies, steps, node work per step in µs): back to back, and with a step
+# of one dt of the node's targets (1 kHz for 100 bodies, 240 Hz for 1000).
+CASES = ((100, 3000, 0.0), (100, 3000, 1000.0), (1000, 600, 0.0), (1000, 600, 4167.0))
+
+
+def run(cases=CASES):
     with tempfile.TemporaryDirectory() as directory:
-        rows = [measure(100, steps_100, directory), measure(1000, steps_1000, directory)]
+        rows = [measure(bodies, steps, directory, work) for bodies, steps, work in cases]
     return rows, zstd_levels()
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--steps-100", type=int, default=3000)
-    parser.add_argument("--steps-1000", type=int, default=600)
+    parser.add_argument("--steps", type=float, default=1.0, help="scale the number of steps of every case")
     args = parser.parse_args(argv)
-    rows, levels = run(args.steps_100, args.steps_1000)
+    rows, levels = run([(b, max(10, int(n * args.steps)), w) for b, n, w in CASES])
     print(markdown(rows, levels))
 
 

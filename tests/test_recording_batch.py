@@ -1,16 +1,22 @@
-"""Recorder.write_many (a step's outputs at once) writes what
+"""Recorder.write_many (a step's outputs at once) writes what mcap's own
 `Writer.add_message` would: same messages, indexes and statistics, and
-byte for byte the same file while the batches do not straddle a chunk."""
+byte for byte the same file while the batches do not straddle a chunk.
+Message by message (`write`), the file is mcap's byte for byte at any chunk
+size (with mcap's zstd level)."""
 
+import mcap
 import pytest
 from mcap.reader import make_reader
+from mcap.writer import CompressionType, Writer
 from nav_msgs.msg import Odometry
 from rclpy.serialization import serialize_message
 from rosgraph_msgs.msg import Clock
 
 from msg_adapters import odometry, time_msg
+from msg_adapters.schema import ros2msg_schema, type_name
+from physics_node import chunk_writer
 from physics_node import recorder as recorder_module
-from physics_node.qos import LATCHED, STREAM
+from physics_node.qos import LATCHED, STREAM, offered_qos_yaml
 from physics_node.recorder import Recorder
 from physics_node.recording_reader import Recording
 
@@ -49,6 +55,45 @@ def _session(path, payloads, chunk_size, batched=True):
     return path
 
 
+class _McapSession:
+    """The same session written by mcap's Writer itself, message by message,
+    as the recorder lays it out (metadata, then a flush)."""
+
+    def __init__(self, f, chunk_size):
+        self.writer = Writer(f, chunk_size=chunk_size, compression=CompressionType.ZSTD)
+        self.writer.start(profile="ros2", library=f"physics_node; mcap {mcap.__version__}")
+        self.schemas, self.channels = {}, {}
+
+    def channel(self, topic, msg_class, qos):
+        if topic not in self.channels:
+            name = type_name(msg_class)
+            if name not in self.schemas:
+                self.schemas[name] = self.writer.register_schema(name, "ros2msg", ros2msg_schema(msg_class).encode())
+            self.channels[topic] = self.writer.register_channel(
+                topic, "cdr", self.schemas[name], {"offered_qos_profiles": offered_qos_yaml(qos)}
+            )
+        return self.channels[topic]
+
+    def add(self, channel_id, data, t, k):
+        self.writer.add_message(channel_id=channel_id, log_time=t, data=data, publish_time=t, sequence=k)
+
+
+def _mcap_session(path, payloads, chunk_size):
+    topics = [f"/physics/{name}/odom" for name in BODIES]
+    with open(path, "wb") as f:
+        s = _McapSession(f, chunk_size)
+        s.writer.add_metadata("physics_node", {"node": "/physics"})
+        s.writer.flush()
+        clock = s.channel("/clock", Clock, LATCHED)
+        channels = [s.channel(topic, Odometry, STREAM) for topic in topics]
+        for k, (t, clock_bytes, odom) in enumerate(payloads):
+            s.add(clock, clock_bytes, t, k)
+            for channel, data in zip(channels, odom):
+                s.add(channel, data, t, k)
+        s.writer.finish()
+    return path
+
+
 def _read(path):
     with open(path, "rb") as f:
         reader = make_reader(f)
@@ -60,14 +105,18 @@ def _read(path):
     return messages, one_topic, counts, (stats.message_count, stats.message_start_time, stats.message_end_time)
 
 
+@pytest.fixture
+def mcap_level(monkeypatch):
+    """mcap's Writer compresses at zstd's default level; the recorder too, for byte comparisons."""
+    monkeypatch.setattr(chunk_writer, "ZSTD_LEVEL", 3)
+
+
 @pytest.mark.parametrize("chunk_size", [1 << 20, 2000])  # one chunk; a chunk every few steps
-def test_batched_writes_read_back_like_add_message(tmp_path, monkeypatch, chunk_size):
+def test_batched_writes_read_back_like_add_message(tmp_path, mcap_level, chunk_size):
     steps = 40
     payloads = _payloads(steps)
     batched = _read(_session(tmp_path / "batched.mcap", payloads, chunk_size))
-    with monkeypatch.context() as m:  # mcap's own Writer.add_message, message by message
-        m.setattr(recorder_module._ChunkAppender, "attach", classmethod(lambda cls, writer: None))
-        single = _read(_session(tmp_path / "single.mcap", payloads, chunk_size, batched=False))
+    single = _read(_mcap_session(tmp_path / "single.mcap", payloads, chunk_size))
     assert batched == single
     messages, one_topic, counts, totals = batched
     assert len(messages) == steps * 4 and one_topic == list(range(steps))
@@ -78,13 +127,22 @@ def test_batched_writes_read_back_like_add_message(tmp_path, monkeypatch, chunk_
         assert (tmp_path / "batched.mcap").read_bytes() == (tmp_path / "single.mcap").read_bytes()
 
 
-def test_a_channel_in_several_batches_of_a_chunk(tmp_path, monkeypatch):
+@pytest.mark.parametrize("chunk_size", [1 << 20, 2000, 300])  # one chunk; every few steps; every message
+def test_message_by_message_is_mcap_writers_file_byte_for_byte(tmp_path, mcap_level, chunk_size):
+    payloads = _payloads(40)
+    ours = _session(tmp_path / "ours.mcap", payloads, chunk_size, batched=False)
+    theirs = _mcap_session(tmp_path / "theirs.mcap", payloads, chunk_size)
+    assert Recording(ours).chunk_count == Recording(theirs).chunk_count
+    assert ours.read_bytes() == theirs.read_bytes()
+
+
+def test_a_channel_in_several_batches_of_a_chunk(tmp_path):
     """Index entries stay in the order the messages were added when a channel
     comes in batches of different shapes (a big batch, then alone, ...)."""
     payloads = _payloads(30)
+    topics = [f"/physics/{name}/odom" for name in BODIES]
 
     def session(path):
-        topics = [f"/physics/{name}/odom" for name in BODIES]
         with Recorder(path, chunk_size=3000) as rec:
             channels = [rec.channel(topic, Odometry, STREAM) for topic in topics]
             for k, (t, _, odom) in enumerate(payloads):
@@ -94,9 +152,22 @@ def test_a_channel_in_several_batches_of_a_chunk(tmp_path, monkeypatch):
                     rec.write_many(channels[::-1], odom[::-1], t + 2, k)
         return path
 
+    def reference(path):
+        with open(path, "wb") as f:
+            s = _McapSession(f, 3000)
+            channels = [s.channel(topic, Odometry, STREAM) for topic in topics]
+            for k, (t, _, odom) in enumerate(payloads):
+                batches = [(channels, odom, t)]
+                if k % 3 == 0:
+                    batches += [(channels[1:2], odom[1:2], t + 1), (channels[::-1], odom[::-1], t + 2)]
+                for ids, datas, time_ns in batches:
+                    for channel, data in zip(ids, datas):
+                        s.add(channel, data, time_ns, k)
+            s.writer.finish()
+        return path
+
     batched = _read(session(tmp_path / "batched.mcap"))
-    monkeypatch.setattr(recorder_module._ChunkAppender, "attach", classmethod(lambda cls, writer: None))
-    single = _read(session(tmp_path / "single.mcap"))
+    single = _read(reference(tmp_path / "single.mcap"))
     assert batched == single  # a batch is never split between chunks, but reads back the same
     assert batched[1] == [k for k in range(30) for _ in range(3 if k % 3 == 0 else 1)]
 
