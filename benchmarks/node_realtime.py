@@ -188,6 +188,7 @@ def listen(topic):
 
     import rclpy
     from geometry_msgs.msg import PoseArray
+    from nav_msgs.msg import Odometry
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.qos import QoSProfile, ReliabilityPolicy
 
@@ -195,8 +196,11 @@ def listen(topic):
     rclpy.init()
     node = rclpy.create_node("node_realtime_listener")
     count = [0]
-    node.create_subscription(PoseArray, topic, lambda _raw: count.__setitem__(0, count[0] + 1),
-                             QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE), raw=True)
+    qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+    node.create_subscription(PoseArray, topic, lambda _raw: count.__setitem__(0, count[0] + 1), qos, raw=True)
+    # and one body's odometry, as a client following a body does (the node
+    # publishes a body's odometry while someone reads it)
+    node.create_subscription(Odometry, topic.rsplit("/", 1)[0] + "/s0/odom", lambda _raw: None, qos, raw=True)
     state = {"mark": None, "base": 0, "done": False}
 
     def read_stdin():
@@ -276,16 +280,16 @@ class StepProbe:
         return tuple(self.samples_[: self.n].T)
 
 
-def measure(case, record, seconds, workdir, listener=True, executor="single"):
+def measure(case, record, seconds, workdir, listener=True, executor="events"):
     """Run the node on `case` for `seconds` of wall time after a warm-up; one row.
-    `executor`: "single" (rclpy's SingleThreadedExecutor, as physics-node) or
-    "events" (rclpy.experimental's EventsExecutor, for comparison)."""
+    `executor`: "events" (rclpy.experimental's EventsExecutor, physics-node's
+    default) or "single" (rclpy's SingleThreadedExecutor, `--executor single`)."""
     executor_kind = executor
     ros_environment()
     import rclpy
-    from rclpy.executors import SingleThreadedExecutor
     from rclpy.parameter import Parameter
 
+    from physics_node.main import make_executor
     from physics_node.node import PhysicsNode
 
     tag = f"{case.scene}_{case.bodies}_{'rec' if record else 'norec'}"
@@ -311,11 +315,7 @@ def measure(case, record, seconds, workdir, listener=True, executor="single"):
                 node.world.step()
         capacity = int(1.2 * (seconds + WARMUP_SECONDS) / case.dt) + 1000
         probe = StepProbe(node, capacity)
-        if executor_kind == "events":
-            from rclpy.experimental.events_executor import EventsExecutor
-            executor = EventsExecutor()
-        else:
-            executor = SingleThreadedExecutor()
+        executor = make_executor(executor_kind)
         executor.add_node(node)
 
         def spin():
@@ -391,7 +391,7 @@ def measure(case, record, seconds, workdir, listener=True, executor="single"):
 
 # ---- the study ------------------------------------------------------------------------
 
-def run(quick=False, out_dir=None, seconds=None, only=None, listener=True, executor="single"):
+def run(quick=False, out_dir=None, seconds=None, only=None, listener=True, executor="events"):
     """Every case with and without `record`; rows as `measure` returns them.
     Writes `node_realtime.md` and `node_realtime.json` into `out_dir` if given."""
     from .progress import Progress
@@ -533,8 +533,8 @@ def main(argv=None):
     p.add_argument("--seconds", type=float, default=None, help="wall seconds per row")
     p.add_argument("--only", nargs="+", metavar="CASE", help="case names or scene kinds to run")
     p.add_argument("--no-listener", action="store_true", help="no subscriber process on ~/poses")
-    p.add_argument("--executor", choices=("single", "events"), default="single",
-                   help="rclpy executor: single (as physics-node) or the experimental events executor")
+    p.add_argument("--executor", choices=("events", "single"), default="events",
+                   help="rclpy executor: events (as physics-node runs by default) or rclpy's single-threaded one")
     p.add_argument("--listen", metavar="TOPIC", help=argparse.SUPPRESS)
     args = p.parse_args(argv)
     if args.listen:

@@ -220,17 +220,30 @@ class OdometryCdr:
         self._twists = np.empty((n, 6))
         self._spans = list(zip(s.start.tolist(), s.end.tolist()))
 
-    def build(self, pos, quat, vel, omega, stamp_ns):
+    def build(self, pos, quat, vel, omega, stamp_ns, rows=None):
+        """The messages of every body, or of the bodies in `rows` (scene
+        indexes, in that order): only those are written and copied out."""
         s = self._slots
         sec, nanosec = _split_stamp(stamp_ns)
-        s.i32[self._stamp] = sec
-        s.u32[self._stamp + 1] = nanosec
-        s.f64[self._pose_at] = _ros_pose_rows(pos, quat, self._rows)
+        if rows is None:
+            stamp, pose_at, twist_at, spans = self._stamp, self._pose_at, self._twist_at, self._spans
+        else:
+            rows = np.asarray(rows, dtype=np.int64)
+            stamp, pose_at, twist_at = self._stamp[rows], self._pose_at[rows], self._twist_at[rows]
+            pos, quat, vel, omega = pos[rows], quat[rows], vel[rows], omega[rows]
+            spans = [self._spans[i] for i in rows.tolist()]
+        s.i32[stamp] = sec
+        s.u32[stamp + 1] = nanosec
+        s.f64[pose_at] = _ros_pose_rows(pos, quat, self._rows[: len(pos)])
         # linear and angular velocity turned into body axes in one call
-        self._twists.reshape(-1, 2, 3)[:] = rotate_to_body(quat[:, None, :], np.stack([vel, omega], axis=1))
-        s.f64[self._twist_at] = self._twists
-        blob = s.store.tobytes()
-        return [blob[a:b] for a, b in self._spans]
+        twists = self._twists[: len(pos)]
+        twists.reshape(-1, 2, 3)[:] = rotate_to_body(quat[:, None, :], np.stack([vel, omega], axis=1))
+        s.f64[twist_at] = twists
+        if rows is None or 4 * len(spans) > len(self._spans):
+            blob = s.store.tobytes()
+            return [blob[a:b] for a, b in spans]
+        store = s.store
+        return [store[a:b].tobytes() for a, b in spans]
 
 
 # Marker colours of the contact events, as the float32 a ColorRGBA carries.

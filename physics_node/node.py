@@ -49,6 +49,9 @@ TICK_BUDGET_S = 0.02
 DROP_WARNING_PERIOD_S = 2.0
 # How often the graph is searched for command topics of bodies the scene lacks.
 UNKNOWN_BODY_SCAN_S = 0.5
+# How often the node checks which odometry and marker topics have readers
+# (outputs.Outputs.refresh_subscribers): a new subscriber is served within this.
+SUBSCRIBER_SCAN_S = 0.2
 
 
 class PhysicsNode(Node):
@@ -88,7 +91,7 @@ class PhysicsNode(Node):
 
     def _connect(self):
         """Publishers, subscriptions, services and timers; first outputs."""
-        self.outputs = Outputs(self, self.model, self.recorder)
+        self.outputs = Outputs(self, self.model, self.recorder, odometry=self.settings.odometry)
         if self.recorder is not None:
             self._start_recording()
 
@@ -120,6 +123,7 @@ class PhysicsNode(Node):
         self._tick = self.create_timer(self.pacer.tick_period(), self._on_tick, clock=steady)
         self.create_timer(1.0, self._on_diagnostics, clock=steady)
         self.create_timer(UNKNOWN_BODY_SCAN_S, self._scan_for_unknown_bodies, clock=steady)
+        self.create_timer(SUBSCRIBER_SCAN_S, self.outputs.refresh_subscribers, clock=steady)
 
         t0 = sim_time_ns(self.world.time)
         self.outputs.send_bodies(self.world, t0, self.world.step_index)
@@ -239,6 +243,7 @@ class PhysicsNode(Node):
 
     def _on_reset(self, _request, response):
         discarded = self.stepper.reset()
+        self.outputs.refresh_subscribers()
         t0 = sim_time_ns(self.world.time)
         step = self.world.step_index
         self.outputs.record_reset(t0, step)
@@ -260,6 +265,7 @@ class PhysicsNode(Node):
             response.success = False
             response.message = "not paused: call pause_physics first"
             return response
+        self.outputs.refresh_subscribers()  # whoever asked for the step sees its outputs
         self._advance(publish_all=True)
         if self.faulted:
             response.success = False
@@ -293,6 +299,8 @@ class PhysicsNode(Node):
                 self._tick.timer_period_ns = int(self.pacer.tick_period() * 1e9)
             elif p.name == "command_timeout":
                 self.stepper.command_timeout = value
+            elif p.name == "odometry":
+                self.outputs.set_odometry(value)
 
     # -- diagnostics ------------------------------------------------------------
     def _on_diagnostics(self):

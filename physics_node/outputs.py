@@ -31,7 +31,7 @@ from .recorder import EVENTS_SUFFIX, RESET_EVENT
 
 
 class Outputs:
-    def __init__(self, node, model, recorder=None):
+    def __init__(self, node, model, recorder=None, odometry="subscribed"):
         self.model = model
         self.recorder = recorder
         self._node = node
@@ -46,17 +46,33 @@ class Outputs:
         self.odom = [pub(Odometry, f"~/{name}/odom", STREAM, event_callbacks=odom_events) for name in model.names]
         self._qos = {p.topic_name: q for p, q in self._all_publishers()}
         self._topic = {p: p.topic_name for p, _ in self._all_publishers()}
-        # What send_state publishes, in order, and the recording's channels for it.
-        self._state = [
-            (self.poses, PoseArray),
-            *((p, Odometry) for p in self.odom),
-            (self.contacts, PointCloud2),
-            (self.markers, MarkerArray),
-        ]
-        self._state_publishers = [p for p, _ in self._state]
-        self._state_channels = None
+        self._channels = {}  # publisher -> recording channel id, made on its first message
         self.events_topic = node.get_fully_qualified_name() + EVENTS_SUFFIX
-        self._build_state = _state_builder(model, node.get_logger())
+        self._build = _state_builder(model, node.get_logger())
+        # On-demand outputs (see refresh_subscribers): the bodies whose odometry
+        # is published, and whether markers are.
+        self.odometry = odometry
+        self._odom_rows = []
+        self._markers_on = False
+        self.refresh_subscribers()
+
+    def refresh_subscribers(self):
+        """Which on-demand outputs are sent: a body's odometry while its
+        topic has a subscriber (every body's with `odometry` 'all'), the
+        markers while someone (RViz, Foxglove) listens. Poses, contacts and
+        /clock are always sent. A publish costs 5-10 us even with no reader,
+        so a thousand unread odometry topics would cost more than the step;
+        `get_subscription_count` costs about 3 us, so the node asks a few
+        times a second (and before a step requested by service)."""
+        if self.odometry == "all":
+            self._odom_rows = list(range(len(self.odom)))
+        else:
+            self._odom_rows = [i for i, p in enumerate(self.odom) if p.get_subscription_count() > 0]
+        self._markers_on = self.markers.get_subscription_count() > 0
+
+    def set_odometry(self, mode):
+        self.odometry = mode
+        self.refresh_subscribers()
 
     def _all_publishers(self):
         yield self.clock, LATCHED
@@ -82,17 +98,29 @@ class Outputs:
         self._send_cdr(self.clock, Clock, clock_cdr(time_ns), time_ns, step)
 
     def send_state(self, world, time_ns, step):
-        """Poses, every body's odometry, contacts and markers of one step."""
-        datas = self._build_state(world.state, world.contacts, time_ns)
-        for publisher, data in zip(self._state_publishers, datas):
+        """Poses, contacts, the odometry and markers someone reads, of one step."""
+        rows, markers = self._odom_rows, self._markers_on
+        datas = self._build(world.state, world.contacts, time_ns, rows, markers)
+        publishers = [self.poses, self.contacts]
+        publishers += [self.odom[i] for i in rows]
+        if markers:
+            publishers.append(self.markers)
+        for publisher, data in zip(publishers, datas):
             publisher.publish(data)
         if self.recorder is not None:
-            if self._state_channels is None:
-                topic = self._topic
-                self._state_channels = [
-                    self.recorder.channel(topic[p], cls, self._qos[topic[p]]) for p, cls in self._state
-                ]
-            self.recorder.write_many(self._state_channels, datas, time_ns, step)
+            channels = self._channels
+            ids = [channels.get(p) for p in publishers]
+            if None in ids:
+                ids = [self._channel(p) for p in publishers]
+            self.recorder.write_many(ids, datas, time_ns, step)
+
+    def _channel(self, publisher):
+        cid = self._channels.get(publisher)
+        if cid is None:
+            topic = self._topic[publisher]
+            cid = self.recorder.channel(topic, publisher.msg_type, self._qos[topic])
+            self._channels[publisher] = cid
+        return cid
 
     def send_bodies(self, world, time_ns, step):
         msg = body_markers(self.model, world.state.pos, world.state.quat, time_ns)
@@ -125,8 +153,9 @@ class Outputs:
 
 
 def _state_builder(model, logger):
-    """`build(state, contacts, time_ns)` -> the CDR bytes of poses, every
-    body's odometry, contacts and markers, in that order. The builders of
+    """`build(state, contacts, time_ns, odom_rows, markers)` -> the CDR bytes
+    of the poses, the contacts, the odometry of the bodies in `odom_rows`
+    and, if `markers`, the markers, in that order. The builders of
     msg_adapters.cdr keep one buffer each and write all bodies at once; if
     they cannot lay out what this rmw serializes, the object builders and
     rclpy's serializer give the same messages, more slowly."""
@@ -134,32 +163,32 @@ def _state_builder(model, logger):
         poses = PoseArrayCdr(len(model.names))
         odometry = OdometryCdr(model.names)
         cloud = ContactCloudCdr()
-        markers = SceneMarkersCdr(model, capacity=max(64, 4 * len(model.names)))
+        scene_markers = SceneMarkersCdr(model, capacity=max(64, 4 * len(model.names)))
     except CdrLayoutError as exc:
         logger.warning(f"per-step messages go through rclpy's serializer: {exc}")
         return _serialized_state_builder(model)
 
-    def build(s, contacts, time_ns):
-        return [
-            poses.build(s.pos, s.quat, time_ns),
-            *odometry.build(s.pos, s.quat, s.vel, s.omega, time_ns),
-            cloud.build(contacts, time_ns),
-            markers.build(s.pos, s.quat, contacts, time_ns),
-        ]
+    def build(s, contacts, time_ns, odom_rows, markers):
+        datas = [poses.build(s.pos, s.quat, time_ns), cloud.build(contacts, time_ns)]
+        if odom_rows:
+            datas += odometry.build(s.pos, s.quat, s.vel, s.omega, time_ns, odom_rows)
+        if markers:
+            datas.append(scene_markers.build(s.pos, s.quat, contacts, time_ns))
+        return datas
 
     return build
 
 
 def _serialized_state_builder(model):
-    odometry, markers = BodyOdometry(model.names), SceneMarkers(model)
+    odometry, scene_markers = BodyOdometry(model.names), SceneMarkers(model)
 
-    def build(s, contacts, time_ns):
-        msgs = [
-            pose_array(s.pos, s.quat, time_ns),
-            *odometry.build(s.pos, s.quat, s.vel, s.omega, time_ns),
-            contact_cloud(contacts, time_ns),
-            markers.build(s.pos, s.quat, contacts, time_ns),
-        ]
+    def build(s, contacts, time_ns, odom_rows, markers):
+        msgs = [pose_array(s.pos, s.quat, time_ns), contact_cloud(contacts, time_ns)]
+        if odom_rows:
+            every = odometry.build(s.pos, s.quat, s.vel, s.omega, time_ns)
+            msgs += [every[i] for i in odom_rows]
+        if markers:
+            msgs.append(scene_markers.build(s.pos, s.quat, contacts, time_ns))
         return [serialize_message(m) for m in msgs]
 
     return build

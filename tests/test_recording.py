@@ -13,10 +13,12 @@ from mcap.writer import Writer
 from test_node_support import FREE_SCENE, Driver, NodeProcess, run_cli
 
 from geometry_msgs.msg import PoseArray, WrenchStamped
+from nav_msgs.msg import Odometry
 from rclpy.serialization import deserialize_message, serialize_message
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import PointCloud2
 from std_srvs.srv import Empty, Trigger
+from visualization_msgs.msg import MarkerArray
 
 from msg_adapters import contacts_from_cloud, time_ns, wrench_stamped
 from physics_node.recording_reader import Recording, recover
@@ -53,8 +55,9 @@ def session(tmp_path_factory):
     scene = workdir / "spin.yaml"
     scene.write_text(SPIN_SCENE)
     path = workdir / "session.mcap"
-    args = ["--scene", scene, "--record", path, "--paused", "--rtf", "0", "--duration", DURATION]
+    args = ["--scene", scene, "--record", path, "--paused", "--rtf", "0", "--duration", DURATION, "--odometry", "all"]
     with NodeProcess(args, workdir) as node, Driver() as driver:
+        driver.listen(MarkerArray, "/physics/markers")  # markers are sent (and recorded) while someone reads them
         node.wait_until_up()
         thrust = driver.wait_for_subscriber(WrenchStamped, "/physics/box/wrench")
         kick = driver.wait_for_subscriber(WrenchStamped, "/physics/ball/impulse")
@@ -237,6 +240,30 @@ def test_sigint_finishes_the_file_and_ros_args_set_parameters(tmp_path):
     assert counts["/physics/poses"] <= counts["/clock"] // 4 + 2
     meta = Recording(path).metadata["physics_node"]
     assert meta["param.real_time_factor"] == "3.0" and meta["param.publish_every"] == "4"
+
+
+def test_odometry_and_markers_go_to_topics_someone_reads(tmp_path):
+    """By default a body's odometry is published (and so recorded) only while
+    its topic has a subscriber, and markers only while someone reads them;
+    poses and /clock always are."""
+    scene = tmp_path / "free.yaml"
+    scene.write_text(FREE_SCENE)
+    path = tmp_path / "on-demand.mcap"
+    with NodeProcess(["--scene", scene, "--record", path, "--paused"], tmp_path) as node, Driver() as driver:
+        ball = driver.listen(Odometry, "/physics/ball/odom")
+        node.wait_until_up()
+        driver.spin_until(lambda: driver.node.count_publishers("/physics/ball/odom") > 0, 10.0, "ball odometry")
+        for _ in range(3):
+            assert driver.call(Trigger, "/physics/step").success
+        driver.spin_until(lambda: len(ball) >= 3, 5.0, "three odometry messages of the ball")
+        node.signal(signal.SIGINT)
+        assert node.wait() == 0, node.log()
+    counts = {}
+    for m in Recording(path).messages():
+        counts[m.topic] = counts.get(m.topic, 0) + 1
+    assert counts["/physics/ball/odom"] >= 3
+    assert "/physics/box/odom" not in counts and "/physics/markers" not in counts
+    assert counts["/physics/poses"] >= 4 and counts["/clock"] >= 4
 
 
 def test_replay_republishes_with_clock(session):
