@@ -5,9 +5,10 @@
 
 Targets: 100 bodies at 1 kHz (dt = 1 ms) and 1,000 bodies at 240 Hz
 (dt = 1/240 s), real_time_factor 1, every output published every step
-(`publish_every` 1: `/clock`, `~/poses`, one `~/<body>/odom` per body,
-`~/contacts`, `~/markers`), and recording (`record`) costing under 10 % of
-the step.
+(`publish_every` 1: `/clock`, `~/poses`, `~/contacts`, and the
+`~/<body>/odom` topics someone subscribes to: here one body's, followed by
+the listener; the `odometry all` rows serve every body's topic), and
+recording (`record`) costing under 10 % of the step.
 
 Scenes (generated dicts, written to a temporary YAML file the node loads):
 
@@ -21,28 +22,33 @@ Scenes (generated dicts, written to a temporary YAML file the node loads):
 - `free`: the same spheres falling under gravity, no plane and no `contacts`
   effect, so what is left is the node's own cost.
 
-How it is measured: in this process, the node class `PhysicsNode` spun by a
-`SingleThreadedExecutor` with `spin_once` in a loop, as `physics-node`
+How it is measured: in this process, the node class `PhysicsNode` spun by
+rclpy's events executor with `spin_once` in a loop, as `physics-node`
 (physics_node/main.py) runs it, with `real_time_factor` 1; each case runs
-without and with `record`. A separate process subscribes to `~/poses` (raw
-CDR, not deserialized) and counts what arrives, so publishing has a real
-subscriber, and the table shows the rate actually delivered. After a
+without and with `record`. A separate process subscribes to `~/poses` and
+to `~/s0/odom` (raw CDR, not deserialized) and counts the poses that
+arrive, so publishing has a real subscriber, and the table shows the rate
+actually delivered. After a
 warm-up (discovery, first steps; 1.5 s), the node runs for a fixed wall time
 (quick 5 s, full 20 s). Every step the node's `_advance` (commands, engine
 step, `/clock`, poses, odometry, contacts, markers, recording) is timed, and
 inside it the engine step and the recorder's writes:
 
 - engine = `Stepper.advance` (queued commands, none here, and `world.step`);
-- record = `Recorder.write_many` / `write` (MCAP records, indexes, and the
-  zstd compression and CRC of each chunk when it fills);
+- record = `Recorder.write_many` / `write` on the node's thread (MCAP
+  records and indexes; the zstd compression, CRC and file writes of each
+  finished chunk run on the recorder's writer thread, counted in the
+  process CPU);
 - publish = the rest of the step: building the messages as CDR, handing them
   to the middleware (`Publisher.publish`), the node's bookkeeping;
-- per message = publish time over the messages of a step (bodies + 4);
+- per message = publish time over the messages of a step;
 - recording overhead = mean step with `record` minus mean step without, as a
   share of the step with `record`, and as a share of dt;
 - in steps = share of the wall time spent inside steps (the rest is the
   executor, timers and idle time); CPU = process CPU time over wall time
-  (all threads: the middleware's too); load = the machine's 1-minute load
+  (all threads: the middleware's and the recorder's writer too); process
+  CPU per step = the same per step, so its recorded-minus-unrecorded
+  difference is the whole cost of recording, writer thread included; load = the machine's 1-minute load
   average at the end of the row (other work on the machine slows every row).
 
 The real-time factor is sim time advanced over wall time in the window; the
@@ -82,6 +88,7 @@ class Case:
     bodies: int
     dt: float
     scene: str      # contacts | contacts_sleep | free
+    odometry: str = "subscribed"   # the node's `odometry` parameter
 
     @property
     def rate_hz(self):
@@ -95,6 +102,9 @@ CASES = (
     Case("1000 @ 240 Hz, contacts", 1000, 1.0 / 240.0, "contacts"),
     Case("1000 @ 240 Hz, contacts, sleep", 1000, 1.0 / 240.0, "contacts_sleep"),
     Case("1000 @ 240 Hz, free", 1000, 1.0 / 240.0, "free"),
+    # every body's odometry topic served each step, read or not
+    Case("100 @ 1 kHz, free, odometry all", 100, 0.001, "free", "all"),
+    Case("1000 @ 240 Hz, free, odometry all", 1000, 1.0 / 240.0, "free", "all"),
 )
 
 
@@ -307,6 +317,7 @@ def measure(case, record, seconds, workdir, listener=True, executor="events"):
             Parameter("real_time_factor", Parameter.Type.DOUBLE, 1.0),
             Parameter("record", Parameter.Type.STRING, record_path),
             Parameter("publish_every", Parameter.Type.INTEGER, 1),
+            Parameter("odometry", Parameter.Type.STRING, case.odometry),
         ])
         if case.scene == "contacts_sleep":
             # Let the spheres land and fall asleep before the node runs, so
@@ -346,6 +357,7 @@ def measure(case, record, seconds, workdir, listener=True, executor="events"):
         received, listen_s = watcher.finish() if watcher is not None else (None, None)
         watcher = None
         messages = node.recorder.message_count if node.recorder is not None else None
+        messages_per_step = 1 + node.outputs.state_messages
         steps_total = node.world.step_index
     finally:
         if watcher is not None:
@@ -372,7 +384,9 @@ def measure(case, record, seconds, workdir, listener=True, executor="events"):
         "rate_hz": case.rate_hz, "record": record, "executor": executor_kind,
         "wall_s": wall, "sim_s": sim, "steps": steps,
         "rtf": sim / wall, "cpu_share": cpu / wall, "busy_share": float(loop.sum()) / wall,
-        "contacts_at_end": contacts_now,
+        "contacts_at_end": contacts_now, "odometry": case.odometry,
+        "messages_per_step": messages_per_step,
+        "process_cpu_ms": cpu / max(steps, 1) * ms,
     }
     for name, a in (("step", loop), ("engine", engine), ("publish", publish), ("record", rec)):
         row[f"{name}_mean_ms"], row[f"{name}_p99_ms"] = stat(a)
@@ -424,7 +438,7 @@ def add_overheads(rows):
     plain = {(r["case"], r.get("executor")): r for r in rows if not r["record"]}
     for r in rows:
         base = plain.get((r["case"], r.get("executor")))
-        for key, clock in (("", "step_mean_ms"), ("_cpu", "step_cpu_ms")):
+        for key, clock in (("", "step_mean_ms"), ("_cpu", "step_cpu_ms"), ("_process", "process_cpu_ms")):
             if r["record"] and base and r[clock] and base[clock]:
                 r[f"record_overhead{key}_ms"] = r[clock] - base[clock]
                 r[f"record_overhead{key}_share"] = r[f"record_overhead{key}_ms"] / r[clock]
@@ -441,12 +455,12 @@ def _pct(x):
 
 
 def _label(row):
-    return row["case"] + (" (events executor)" if row.get("executor") == "events" else "")
+    return row["case"] + (" (single-threaded executor)" if row.get("executor") == "single" else "")
 
 
 def messages_per_step(row):
-    """`/clock`, poses, contacts, markers and one odometry per body."""
-    return row["bodies"] + 4
+    """`/clock`, poses, contacts and the odometry (and markers) sent."""
+    return row.get("messages_per_step") or row["bodies"] + 4
 
 
 def markdown(rows, seconds, machine_line):
@@ -465,25 +479,31 @@ def markdown(rows, seconds, machine_line):
             _f(r["dt_ms"]), f"{100 * r['busy_share']:.0f} %", f"{100 * r['cpu_share']:.0f} %",
             _f(r.get("load_average"), 1),
         ])
-    cpu_header = ["case", "record", "step", "engine", "publish", "per message (µs)", "record",
-                  "record share of step", "recording overhead (of step / of dt)", "MCAP per step (kB)"]
+    cpu_header = ["case", "record", "step", "engine", "publish", "messages", "per message (µs)", "record",
+                  "record share of step", "recording overhead (of step / of dt)", "process CPU per step",
+                  "recording, whole process (of dt)", "MCAP per step (kB)"]
     cpu = []
     for r in rows:
         rec = r["record"]
         cpu.append([
             _label(r), "yes" if rec else "no", _f(r["step_cpu_ms"]), _f(r["engine_cpu_ms"]),
-            _f(r["publish_cpu_ms"]), _f(1e3 * r["publish_cpu_ms"] / messages_per_step(r), 1),
+            _f(r["publish_cpu_ms"]), str(messages_per_step(r)),
+            _f(1e3 * r["publish_cpu_ms"] / messages_per_step(r), 1),
             _f(r["record_cpu_ms"]) if rec else "—",
             _pct(r["record_cpu_ms"] / r["step_cpu_ms"]) if rec else "—",
             f"{_pct(r['record_overhead_cpu_share'])} / {_pct(r['record_overhead_cpu_ms'] / r['dt_ms'])}"
             if rec and r["record_overhead_cpu_ms"] is not None else "—",
+            _f(r.get("process_cpu_ms")),
+            _pct(r["record_overhead_process_ms"] / r["dt_ms"])
+            if rec and r.get("record_overhead_process_ms") is not None else "—",
             _f(r["recording_kb_per_step"], 1) if rec else "—",
         ])
     align = "ll" + "r" * 20
     lines = [
         "# Node real time: step, publish and recording cost", "",
         f"Machine: {machine_line}. Each row: {seconds:g} s of wall time at real_time_factor 1, every output "
-        "published every step, after a warm-up. Regenerate with `physics-bench node` (`--quick`: 5 s per row).",
+        "someone reads published every step, after a warm-up. Regenerate with `physics-bench node` "
+        "(`--quick`: 5 s per row).",
         "", "## Real time (wall clock, ms)", "",
         table(wall_header, wall, align=align[: len(wall_header)]),
         "## Cost per step (CPU time of the node's thread, mean, ms)", "",
@@ -518,8 +538,11 @@ def reading(rows):
         if r["record"]:
             share = r["record_cpu_ms"] / step
             ok = "under" if share < RECORD_TARGET else "over"
-            line += (f"; recording takes {share:.0%} of the step ({ok} the 10 % target), "
+            line += (f"; recording takes {share:.0%} of the step on the node's thread ({ok} the 10 % target), "
                      f"{r['recording_kb_per_step']:.1f} kB of MCAP per step")
+            extra = r.get("record_overhead_process_ms")
+            if extra is not None:
+                line += f"; the whole process, writer thread included, spends {extra:.3f} ms more CPU per step"
         if r.get("listener_ready") is False:
             line += "; the ~/poses subscriber never matched"
         out.append(line + ".")

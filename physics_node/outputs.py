@@ -70,6 +70,11 @@ class Outputs:
             self._odom_rows = [i for i, p in enumerate(self.odom) if p.get_subscription_count() > 0]
         self._markers_on = self.markers.get_subscription_count() > 0
 
+    @property
+    def state_messages(self):
+        """Messages `send_state` sends now: poses, contacts, odometry, markers."""
+        return 2 + len(self._odom_rows) + int(self._markers_on)
+
     def set_odometry(self, mode):
         self.odometry = mode
         self.refresh_subscribers()
