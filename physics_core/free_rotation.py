@@ -15,7 +15,9 @@ an exact flow; the symmetric composition is second order, keeps L exactly
 (to round-off) and keeps the energy bounded instead of drifting.
 
 A body with equal principal moments (sphere, cube) rotates about the fixed
-L at ω = L / I; for those rows the exact exponential map is used instead.
+L at ω = L / I; for those rows the exact exponential map is used instead,
+and the splitting runs only on the other rows (RowSplit, computed once per
+World): a scene of spheres never pays for it.
 """
 import numpy as np
 
@@ -39,12 +41,83 @@ def isotropic_rows(inertia: np.ndarray) -> np.ndarray:
     return np.ptp(inertia, axis=1) <= 1e-12 * np.max(np.abs(inertia), axis=1)
 
 
+class RowSplit:
+    """The bodies of a scene split once into isotropic and other rows, so a
+    step does no per-row test: with every body isotropic (a scene of spheres
+    and cubes) the splitting below never runs."""
+
+    def __init__(self, isotropic):
+        isotropic = np.asarray(isotropic, dtype=bool)
+        self.n = len(isotropic)
+        self.iso = np.flatnonzero(isotropic)
+        self.aniso = np.flatnonzero(~isotropic)
+        self.all_iso = len(self.aniso) == 0
+        self.no_iso = len(self.iso) == 0
+
+
+def _rows(isotropic) -> RowSplit:
+    return isotropic if isinstance(isotropic, RowSplit) else RowSplit(isotropic)
+
+
+def world_momentum(q, inertia, omega, isotropic):
+    """L = I_w ω. For an isotropic body I_w = I 1 in any pose (COURSE.md 3),
+    so L = I ω without turning ω into the body frame and back."""
+    rows = _rows(isotropic)
+    L = inertia[:, :1] * omega
+    if not rows.all_iso:
+        a = rows.aniso
+        qa = q[a]
+        L[a] = qt.rotate(qa, inertia[a] * qt.rotate_inverse(qa, omega[a]))
+    return L
+
+
+def world_velocity(q, inv_inertia, L, isotropic):
+    """ω = I_w⁻¹ L (the inverse of world_momentum)."""
+    rows = _rows(isotropic)
+    omega = inv_inertia[:, :1] * L
+    if not rows.all_iso:
+        a = rows.aniso
+        qa = q[a]
+        omega[a] = qt.rotate(qa, inv_inertia[a] * qt.rotate_inverse(qa, L[a]))
+    return omega
+
+
+def turn(q, omega, h):
+    """q advanced by the exact exponential map of ω h; rows with ω = 0 are
+    left as they are (a body at rest, or asleep, costs nothing)."""
+    spin = np.flatnonzero(omega.any(axis=1))
+    if len(spin) == len(q):
+        return qt.integrate(q, omega, h)
+    out = q.copy()
+    if len(spin):
+        out[spin] = qt.integrate(q[spin], omega[spin], h)
+    return out
+
+
 def advance(q, L, inv_inertia, h, isotropic):
     """(new orientation, new world ω) after a torque-free rotation of length h.
 
     q: (n, 4) orientations; L: (n, 3) world angular momentum, kept constant;
     inv_inertia: (n, 3) principal inverse moments (0 for frozen bodies);
-    isotropic: (n,) bool, rows advanced by the exact map."""
+    isotropic: (n,) bool or a RowSplit; those rows rotate about the fixed L at
+    ω = L / I, advanced by the exact map, and only the others are split."""
+    rows = _rows(isotropic)
+    if rows.all_iso:
+        omega = L * inv_inertia[:, :1]
+        return turn(q, omega, h), omega
+    if rows.no_iso:
+        return _split(q, L, inv_inertia, h)
+    a, i = rows.aniso, rows.iso
+    out = np.empty_like(q)
+    omega = np.empty_like(L)
+    out[a], omega[a] = _split(q[a], L[a], inv_inertia[a], h)
+    omega[i] = L[i] * inv_inertia[i, :1]
+    out[i] = turn(q[i], omega[i], h)
+    return out, omega
+
+
+def _split(q, L, inv_inertia, h):
+    """The symmetric splitting over principal axes, for every row given."""
     Lb = qt.rotate_inverse(q, L)                          # body-frame L
     out = q
     for axis, frac in _SEQUENCE:
@@ -57,9 +130,4 @@ def advance(q, L, inv_inertia, h, isotropic):
         L_cross_e = Lb.take(_L_PERM[axis], axis=1) * _L_SIGN[axis]
         Lb = Lb + (c2 - 1.0) * (Lb * _L_OFF_AXIS[axis]) + s2 * L_cross_e
     out = qt.normalize(out)
-    omega = qt.rotate(out, inv_inertia * Lb)
-    if isotropic.any():
-        omega_iso = L * inv_inertia[:, :1]
-        out = np.where(isotropic[:, None], qt.integrate(q, omega_iso, h), out)
-        omega = np.where(isotropic[:, None], omega_iso, omega)
-    return out, omega
+    return out, qt.rotate(out, inv_inertia * Lb)

@@ -13,7 +13,9 @@ translational update, they keep the energy of a free body bounded.
 Each integrator calls `sys.forces(x, q, v, ω) -> (F, τ)` as often as its
 order needs (1 for the Euler pair, 2 for velocity Verlet, 4 for RK4).
 When no body spins and nothing can apply torque, the rotational half is
-skipped (`sys.rotating` false).
+skipped (`sys.rotating` false). `sys.rotation_rows` (free_rotation.RowSplit)
+names the isotropic bodies: for them I_w = I 1, so L = I ω and ω = L / I
+need no change of frame, and their orientation follows the exact map.
 """
 import numpy as np
 
@@ -21,12 +23,19 @@ from . import free_rotation
 from . import quaternion as qt
 
 
-def angular_momentum(q, inertia, omega):
-    return qt.rotate(q, inertia * qt.rotate_inverse(q, omega))
+def angular_momentum(q, inertia, omega, rows=None):
+    """L = I_w ω; `rows` (free_rotation.RowSplit) lets isotropic bodies skip
+    the two frame changes (I_w = I 1 for them)."""
+    if rows is None:
+        return qt.rotate(q, inertia * qt.rotate_inverse(q, omega))
+    return free_rotation.world_momentum(q, inertia, omega, rows)
 
 
-def angular_velocity(q, inv_inertia, L):
-    return qt.rotate(q, inv_inertia * qt.rotate_inverse(q, L))
+def angular_velocity(q, inv_inertia, L, rows=None):
+    """ω = I_w⁻¹ L, with the same isotropic shortcut as angular_momentum."""
+    if rows is None:
+        return qt.rotate(q, inv_inertia * qt.rotate_inverse(q, L))
+    return free_rotation.world_velocity(q, inv_inertia, L, rows)
 
 
 def explicit_euler(sys, h):
@@ -35,9 +44,9 @@ def explicit_euler(sys, h):
     s.pos += s.vel * h
     s.vel += F * sys.inv_mass * h
     if sys.rotating:
-        L = angular_momentum(s.quat, sys.inertia, s.omega) + T * h
-        s.quat = qt.integrate(s.quat, s.omega, h)
-        s.omega = angular_velocity(s.quat, sys.inv_inertia, L)
+        L = angular_momentum(s.quat, sys.inertia, s.omega, sys.rotation_rows) + T * h
+        s.quat = free_rotation.turn(s.quat, s.omega, h)
+        s.omega = angular_velocity(s.quat, sys.inv_inertia, L, sys.rotation_rows)
 
 
 def semi_implicit_euler(sys, h):
@@ -47,8 +56,8 @@ def semi_implicit_euler(sys, h):
     s.vel += F * sys.inv_mass * h
     s.pos += s.vel * h
     if sys.rotating:
-        L = angular_momentum(s.quat, sys.inertia, s.omega) + T * h
-        s.quat, s.omega = free_rotation.advance(s.quat, L, sys.inv_inertia, h, sys.isotropic)
+        L = angular_momentum(s.quat, sys.inertia, s.omega, sys.rotation_rows) + T * h
+        s.quat, s.omega = free_rotation.advance(s.quat, L, sys.inv_inertia, h, sys.rotation_rows)
 
 
 def velocity_verlet(sys, h):
@@ -62,15 +71,15 @@ def velocity_verlet(sys, h):
     v_half = s.vel + 0.5 * h * a0
     s.pos += v_half * h
     if sys.rotating:
-        L_half = angular_momentum(s.quat, sys.inertia, s.omega) + 0.5 * h * T0
-        s.quat, _ = free_rotation.advance(s.quat, L_half, sys.inv_inertia, h, sys.isotropic)
-        omega_pred = angular_velocity(s.quat, sys.inv_inertia, L_half + 0.5 * h * T0)
+        L_half = angular_momentum(s.quat, sys.inertia, s.omega, sys.rotation_rows) + 0.5 * h * T0
+        s.quat, _ = free_rotation.advance(s.quat, L_half, sys.inv_inertia, h, sys.rotation_rows)
+        omega_pred = angular_velocity(s.quat, sys.inv_inertia, L_half + 0.5 * h * T0, sys.rotation_rows)
     else:
         omega_pred = s.omega
     F1, T1 = sys.forces(s.pos, s.quat, v_half + 0.5 * h * a0, omega_pred)
     s.vel = v_half + 0.5 * h * F1 * sys.inv_mass
     if sys.rotating:
-        s.omega = angular_velocity(s.quat, sys.inv_inertia, L_half + 0.5 * h * T1)
+        s.omega = angular_velocity(s.quat, sys.inv_inertia, L_half + 0.5 * h * T1, sys.rotation_rows)
 
 
 def rk4(sys, h):
@@ -78,12 +87,12 @@ def rk4(sys, h):
     s = sys.state
     x0, q0, v0 = s.pos, s.quat, s.vel
     rot = sys.rotating
-    L0 = angular_momentum(q0, sys.inertia, s.omega) if rot else None
+    L0 = angular_momentum(q0, sys.inertia, s.omega, sys.rotation_rows) if rot else None
 
     def deriv(x, q, v, L):
         if rot:
             q = qt.normalize(q)
-            w = angular_velocity(q, sys.inv_inertia, L)
+            w = angular_velocity(q, sys.inv_inertia, L, sys.rotation_rows)
         else:
             w = s.omega
         F, T = sys.forces(x, q, v, w)
@@ -100,7 +109,7 @@ def rk4(sys, h):
     if rot:
         s.quat = qt.normalize(q0 + w * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]))
         L = L0 + w * (k1[3] + 2.0 * k2[3] + 2.0 * k3[3] + k4[3])
-        s.omega = angular_velocity(s.quat, sys.inv_inertia, L)
+        s.omega = angular_velocity(s.quat, sys.inv_inertia, L, sys.rotation_rows)
 
 
 def _trial(x0, q0, v0, L0, k, c, rot):

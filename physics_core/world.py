@@ -30,7 +30,7 @@ from .contact_events import ContactEvents
 from .effects import Kinematics, build_force_effects, potential_energy
 from .effects.springs import makes_torque, stable_substeps
 from .errors import CommandError, NonFiniteStateError
-from .free_rotation import isotropic_rows
+from .free_rotation import RowSplit, isotropic_rows
 from .integrators import INTEGRATORS
 from .shapes import BOX
 from .state import State
@@ -52,6 +52,7 @@ class World:
         self.substeps = max(model.substeps, self.spring_substeps)
         self._integrate = INTEGRATORS[model.integrator]
         self.isotropic = isotropic_rows(model.inertia)   # free rotation is exact for these
+        self.rotation_rows = RowSplit(self.isotropic)    # ... and needs no splitting
         self._contact_stages = []
         if "contacts" in model.effects:
             from .collision import build_contact_stages
