@@ -52,6 +52,7 @@ UNKNOWN_BODY_SCAN_S = 0.5
 # How often the node checks which odometry and marker topics have readers
 # (outputs.Outputs.refresh_subscribers): a new subscriber is served within this.
 SUBSCRIBER_SCAN_S = 0.2
+SUBSCRIBER_SCAN_PARTS = 10
 
 
 class PhysicsNode(Node):
@@ -123,7 +124,11 @@ class PhysicsNode(Node):
         self._tick = self.create_timer(self.pacer.tick_period(), self._on_tick, clock=steady)
         self.create_timer(1.0, self._on_diagnostics, clock=steady)
         self.create_timer(UNKNOWN_BODY_SCAN_S, self._scan_for_unknown_bodies, clock=steady)
-        self.create_timer(SUBSCRIBER_SCAN_S, self.outputs.refresh_subscribers, clock=steady)
+        self.create_timer(
+            SUBSCRIBER_SCAN_S / SUBSCRIBER_SCAN_PARTS,
+            lambda: self.outputs.poll_subscribers(SUBSCRIBER_SCAN_PARTS),
+            clock=steady,
+        )
 
         t0 = sim_time_ns(self.world.time)
         self.outputs.send_bodies(self.world, t0, self.world.step_index)

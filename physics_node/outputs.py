@@ -49,11 +49,13 @@ class Outputs:
         self._channels = {}  # publisher -> recording channel id, made on its first message
         self.events_topic = node.get_fully_qualified_name() + EVENTS_SUFFIX
         self._build = _state_builder(model, node.get_logger())
-        # On-demand outputs (see refresh_subscribers): the bodies whose odometry
-        # is published, and whether markers are.
+        # On-demand outputs (see refresh_subscribers): which bodies' odometry
+        # topics have a reader, the rows published, and whether markers are.
         self.odometry = odometry
+        self._odom_read = [False] * len(self.odom)
         self._odom_rows = []
         self._markers_on = False
+        self._poll_at = 0
         self.refresh_subscribers()
 
     def refresh_subscribers(self):
@@ -61,14 +63,30 @@ class Outputs:
         topic has a subscriber (every body's with `odometry` 'all'), the
         markers while someone (RViz, Foxglove) listens. Poses, contacts and
         /clock are always sent. A publish costs 5-10 us even with no reader,
-        so a thousand unread odometry topics would cost more than the step;
-        `get_subscription_count` costs about 3 us, so the node asks a few
-        times a second (and before a step requested by service)."""
+        so a thousand unread odometry topics would cost more than the step."""
+        self._odom_read = [p.get_subscription_count() > 0 for p in self.odom]
+        self._markers_on = self.markers.get_subscription_count() > 0
+        self._update_rows()
+
+    def poll_subscribers(self, parts):
+        """`refresh_subscribers` spread over `parts` calls: each asks the next
+        slice of odometry publishers (about 3 us each), so a thousand bodies
+        never cost one long pause between two steps."""
+        n = len(self.odom)
+        size = -(-n // max(int(parts), 1))
+        start = self._poll_at
+        read = self._odom_read
+        for i in range(start, min(start + size, n)):
+            read[i] = self.odom[i].get_subscription_count() > 0
+        self._poll_at = start + size if start + size < n else 0
+        self._markers_on = self.markers.get_subscription_count() > 0
+        self._update_rows()
+
+    def _update_rows(self):
         if self.odometry == "all":
             self._odom_rows = list(range(len(self.odom)))
         else:
-            self._odom_rows = [i for i, p in enumerate(self.odom) if p.get_subscription_count() > 0]
-        self._markers_on = self.markers.get_subscription_count() > 0
+            self._odom_rows = [i for i, r in enumerate(self._odom_read) if r]
 
     @property
     def state_messages(self):
