@@ -142,7 +142,12 @@ class Recorder:
             return self
         parent = os.path.dirname(os.path.abspath(self.path))
         os.makedirs(parent, exist_ok=True)
-        sink = ChunkWriter(self._open_file(), threaded=WRITER_THREAD, level=chunk_writer.ZSTD_LEVEL)
+        sink = ChunkWriter(
+            self._open_file(),
+            threaded=WRITER_THREAD,
+            level=chunk_writer.ZSTD_LEVEL,
+            queue_jobs=chunk_writer.QUEUE_JOBS,
+        )
         self._sink = sink
         self._stop_sink = weakref.finalize(self, sink.close)
         self._reported = None
