@@ -199,23 +199,34 @@ def _large_pairs(big, small, cols, cell):
     return _filter(cols, i, j)
 
 
-def plane_pairs(model, pos, quat, margin: float = 0.0, bodies=None):
+def plane_pairs(model, pos, quat, margin: float = 0.0, bodies=None, rows=None):
     """(plane, body) pairs where a dynamic body's lowest point along the plane
     normal lies less than `margin` above the plane (n·x = offset, solid below).
 
     The lowest point of a sphere is r below its centre along the normal; of a
     box, Σ h_k |n·axis_k| below it (the box's support in direction -n)."""
-    planes = np.flatnonzero(model.shape_type == PLANE)
-    if bodies is None:
-        bodies = np.flatnonzero(~model.is_static & (model.shape_type != PLANE))
-    if len(planes) == 0 or len(bodies) == 0:
+    planes, bodies, gap = plane_clearance(model, pos, quat, bodies, rows)
+    if gap is None:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
-    n = model.plane_normal[planes]                                  # (P, 3)
-    height = pos[bodies] @ n.T - model.plane_offset[planes]         # (B, P)
-    reach = support_along(model, quat, bodies, n)                   # (B, P)
-    b, p = np.nonzero(height - reach < margin)
+    b, p = np.nonzero(gap < margin)
     order = np.lexsort((bodies[b], planes[p]))
     return planes[p][order], bodies[b][order]
+
+
+def plane_clearance(model, pos, quat, bodies=None, rows=None):
+    """(planes, bodies, gap): gap (B, P) is the height of each dynamic body's
+    lowest point above each plane (None when there is no plane or body).
+    plane_pairs and the kept pair list (pair_cache.py) both test this one
+    array, so they agree to the last bit."""
+    rows = rows or ModelRows(model)
+    planes = rows.planes
+    if bodies is None:
+        bodies = rows.plane_bodies
+    if len(planes) == 0 or len(bodies) == 0:
+        return planes, bodies, None
+    n = model.plane_normal[planes]                                  # (P, 3)
+    height = pos[bodies] @ n.T - model.plane_offset[planes]         # (B, P)
+    return planes, bodies, height - support_along(model, quat, bodies, n)
 
 
 def support_along(model, quat, bodies, directions):
@@ -235,21 +246,51 @@ def candidate_pairs(model, pos, quat, margin: float = 0.0):
 
     Solid pairs need overlapping margin-grown AABBs and bounding spheres
     (|c_a - c_b| <= R_a + R_b + margin); static–static pairs are dropped."""
-    pos = np.asarray(pos, dtype=float)
-    solid = np.flatnonzero(model.shape_type != PLANE)
+    rows = ModelRows(model)
+    return sorted_pairs(model, *solid_pairs(model, pos, quat, margin, rows),
+                        *plane_pairs(model, pos, quat, margin, rows=rows))[:2]
+
+
+def solid_columns(model, pos, quat, margin, rows):
+    """(lo, hi, centre, reach) of the solid bodies' margin-grown AABBs and bounding spheres."""
+    solid = rows.solid
     half = aabb_half_extents(model, quat)[solid] + 0.5 * margin
-    p = pos[solid]
-    i, j = overlapping_pairs(p - half, p + half, p, bounding_radius(model)[solid] + 0.5 * margin)
-    i, j = solid.take(i), solid.take(j)
+    p = np.asarray(pos, dtype=float)[solid]
+    return p - half, p + half, p, rows.radius[solid] + 0.5 * margin
+
+
+def solid_pairs(model, pos, quat, margin, rows, local=False):
+    """(a, b) solid pairs in the Manifold order, static–static dropped, unsorted.
+    With `local`, also the two indices of each pair into the solid bodies."""
+    solid = rows.solid
+    i, j = overlapping_pairs(*solid_columns(model, pos, quat, margin, rows))
+    a, b = solid.take(i), solid.take(j)
     static = model.is_static
-    keep = ~(static.take(i) & static.take(j))
-    i, j = i[keep], j[keep]
-    flip = static.take(j) & ~static.take(i)
-    a = np.where(flip, j, i)
-    b = np.where(flip, i, j)
-    pa, pb = plane_pairs(model, pos, quat, margin)
+    keep = ~(static.take(a) & static.take(b))
+    a, b = a[keep], b[keep]
+    flip = static.take(b) & ~static.take(a)
+    a, b = np.where(flip, b, a), np.where(flip, a, b)
+    return (a, b, i[keep], j[keep]) if local else (a, b)
+
+
+def sorted_pairs(model, a, b, pa, pb):
+    """Solid pairs (a, b) and plane pairs (pa, pb) as one list sorted by (min, max)
+    index: (a, b, order), order indexing the concatenation [solid, plane]."""
     if len(pa):
         a = np.concatenate([a, pa])
         b = np.concatenate([b, pb])
     order = np.argsort(np.minimum(a, b) * model.n + np.maximum(a, b), kind="stable")
-    return a[order], b[order]
+    return a[order], b[order], order
+
+
+class ModelRows:
+    """Per-model constants of the broad phase (a Model is frozen): the pair
+    cache computes them once, a one-off call each time."""
+
+    def __init__(self, model):
+        st = model.shape_type
+        self.solid = np.flatnonzero(st != PLANE)
+        self.planes = np.flatnonzero(st == PLANE)
+        self.plane_bodies = np.flatnonzero(~model.is_static & (st != PLANE))
+        self.radius = bounding_radius(model)
+        self.box = np.flatnonzero(st == BOX)

@@ -70,14 +70,15 @@ def pair_key(a, b, n: int, slot) -> np.ndarray:
     return (np.minimum(a, b) * n + np.maximum(a, b)) * SLOTS + np.asarray(slot, dtype=np.int64)
 
 
-def detect(model, pos, quat, margin: float = 0.0) -> Manifold:
+def detect(model, pos, quat, margin: float = 0.0, pairs=None) -> Manifold:
     """Every contact with depth > -margin between the bodies of `model` at poses
     (pos (n, 3), quat (n, 4) w, x, y, z body→world); static–static pairs skipped.
 
     Broad phase (broadphase.py) proposes pairs whose margin-grown bounding
     boxes overlap; the narrow phase (narrowphase.py) turns each pair into
     contact points. Rows are sorted by key, so the result is deterministic.
+    `pairs` (pair_cache.PairCache) keeps the broad phase's list between calls.
     """
     from .narrowphase import collide
     return collide(model, np.asarray(pos, dtype=float), np.asarray(quat, dtype=float),
-                   float(margin))
+                   float(margin), pairs)

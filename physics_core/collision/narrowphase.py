@@ -188,9 +188,13 @@ def contacts(model, a, b, pa, qa, pb, qb, margin: float = 0.0) -> Manifold:
     return _manifold(model, a, b, _kernel_rows(model, a, b, margin, pair_poses=(pa, qa, pb, qb)))
 
 
-def collide(model, pos, quat, margin: float = 0.0) -> Manifold:
-    """Broad phase, then every kernel; rows with depth > -margin, sorted by key."""
-    a, b = candidate_pairs(model, pos, quat, margin)
+def collide(model, pos, quat, margin: float = 0.0, pairs=None) -> Manifold:
+    """Broad phase, then every kernel; rows with depth > -margin, sorted by key.
+    `pairs`: a pair_cache.PairCache to take the broad phase from (same pairs)."""
+    if pairs is None:
+        a, b = candidate_pairs(model, pos, quat, margin)
+    else:
+        a, b = pairs.pairs(model, pos, quat, margin)
     if len(a) == 0:
         return Manifold.empty()
     rows = _kernel_rows(model, a, b, margin, pos=pos, quat=quat)

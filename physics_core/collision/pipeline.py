@@ -6,6 +6,7 @@ from . import contact_rows, restitution, sleep, solver
 from .coloring import batches, color_contacts
 from .events import EventAccumulator
 from .manifold import Manifold, detect
+from .pair_cache import PairCache
 from .warm_start import WarmCache
 
 SCRATCH_KEY = "contacts"
@@ -15,7 +16,9 @@ class ContactScratch:
     """What the contact stages keep between substeps and steps (in State.scratch,
     so World.reset() starts afresh)."""
 
-    def __init__(self, n):
+    def __init__(self, model):
+        n = model.n
+        self.pairs = PairCache(model)   # broad-phase pairs kept between substeps
         self.warm = WarmCache()
         self.events = EventAccumulator()
         self.sleep = sleep.SleepState(n)
@@ -75,7 +78,7 @@ class ContactPipeline:
     def scratch(self, world) -> ContactScratch:
         sc = world.state.scratch.get(SCRATCH_KEY)
         if sc is None:
-            sc = world.state.scratch[SCRATCH_KEY] = ContactScratch(self.model.n)
+            sc = world.state.scratch[SCRATCH_KEY] = ContactScratch(self.model)
         return sc
 
     @staticmethod
@@ -91,7 +94,7 @@ class ContactPipeline:
         if p.sleep:
             sc.sleep.sync(s.awake)
         if np.count_nonzero(s.awake & ~model.is_static):
-            m = detect(model, s.pos, s.quat, p.margin)
+            m = detect(model, s.pos, s.quat, p.margin, sc.pairs)
         else:
             m = Manifold.empty()     # all asleep: nothing can start touching
         if p.sleep and len(m):
