@@ -21,6 +21,11 @@ import numpy as np
 from .. import quaternion as qt
 from . import friction, restitution
 
+try:        # the C entry point of np.einsum, without the Python dispatch layer
+    from numpy._core.multiarray import c_einsum as _einsum
+except ImportError:     # pragma: no cover - other numpy layouts
+    _einsum = np.einsum
+
 _TINY = 1e-30
 
 
@@ -86,15 +91,13 @@ def body_velocities(state):
     return np.concatenate([state.vel, state.omega], axis=1)
 
 
-def _cross_rows(r, D):
-    """(k, 3, 3): r × d for each row d of D (k, 3, 3), r (k, 3)."""
-    out = np.empty_like(D)
-    rx, ry, rz = r[:, 0:1], r[:, 1:2], r[:, 2:3]
-    dx, dy, dz = D[:, :, 0], D[:, :, 1], D[:, :, 2]
-    out[:, :, 0] = ry * dz - rz * dy
-    out[:, :, 1] = rz * dx - rx * dz
-    out[:, :, 2] = rx * dy - ry * dx
-    return out
+_SIDE = np.array([-1.0, 1.0])[:, None, None]   # J_A carries −d and −r_A × d, J_B +d and r_B × d
+_COFACTOR = np.array([[1.0, -1.0], [-1.0, 1.0]])   # the signs of a 2×2 inverse
+
+
+def _rows_first(a):
+    """(…, k) computed with the contacts on the last axis → (k, …) C-ordered."""
+    return np.ascontiguousarray(np.moveaxis(a, -1, 0))
 
 
 def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=None, rewound=None):
@@ -106,28 +109,48 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
     (k, 2) multiplies each row's two inverse masses in the effective masses
     only (Jacobi mass splitting). The normal row's target `bias` keeps the pair
     from overlapping at the end of the step (speculative contact, see
-    collision/__init__)."""
+    collision/__init__).
+
+    J and M are built with the contacts on the last axis (arrays (…, k)):
+    every operation then runs over long contiguous rows, where numpy is fast,
+    instead of over many short ones of 3 or 12 numbers; they are handed to
+    the solver contact-major, (k, 3, 12)."""
     a, b, n = m.a, m.b, m.normal
     k = len(a)
-    t1, t2 = friction.tangent_basis(n)
-    D = np.stack([n, t1, t2], axis=1)                      # (k, 3 rows, 3)
-    rA = m.point - pos[a]
-    rB = m.point - pos[b]
-    J = np.concatenate([-D, -_cross_rows(rA, D), D, _cross_rows(rB, D)], axis=2)
+    ab = np.stack([a, b], axis=1)
+    D = friction.tangent_frame(n)                          # (k, 3 rows, 3)
+    DT = _rows_first_inverse(D)                            # (3 rows, 3, k)
+    # lever arms, signed by side: −r_A, +r_B (2, 3, k)
+    r = _rows_first_inverse(m.point[:, None, :] - pos[ab]) * _SIDE
+    # J as (row, body, linear | angular, xyz, k): (side d, r_side × d)
+    JT = np.empty((3, 2, 2, 3, k))
+    np.multiply(DT[:, None], _SIDE, out=JT[:, :, 0])
+    rx, ry, rz = r[None, :, 0], r[None, :, 1], r[None, :, 2]        # (1, 2, k)
+    dx, dy, dz = DT[:, None, 0], DT[:, None, 1], DT[:, None, 2]     # (3, 1, k)
+    ang = JT[:, :, 1]
+    np.subtract(ry * dz, rz * dy, out=ang[:, :, 0])
+    np.subtract(rz * dx, rx * dz, out=ang[:, :, 1])
+    np.subtract(rx * dy, ry * dx, out=ang[:, :, 2])
     # M = M⁻¹ Jᵀ as rows: inverse masses scale the linear columns; the angular
     # ones take I_w⁻¹, a scalar for isotropic bodies, a 3×3 product otherwise
-    inv_a, inv_b = inv_mass[a], inv_mass[b]
+    MT = np.empty_like(JT)
+    np.multiply(JT[:, :, 0], inv_mass[ab].T[None, :, None], out=MT[:, :, 0])
     if inv_inertia_w is None:
-        scale = np.repeat(np.stack([inv_a, iso_inv[a], inv_b, iso_inv[b]], axis=1), 3, axis=1)
-        M = J * scale[:, None, :]
+        np.multiply(ang, iso_inv[ab].T[None, :, None], out=MT[:, :, 1])
+        M = _rows_first(MT.reshape(3, 12, k))
+        J = _rows_first(JT.reshape(3, 12, k))
     else:
-        M = np.concatenate([J[:, :, 0:3] * inv_a[:, None, None], J[:, :, 3:6] @ inv_inertia_w[a],
-                            J[:, :, 6:9] * inv_b[:, None, None], J[:, :, 9:12] @ inv_inertia_w[b]],
-                           axis=2)                  # I_w⁻¹ is symmetric
-    # each body's part of the normal's inverse effective mass (the course's
+        J = _rows_first(JT.reshape(3, 12, k))
+        M = _rows_first(MT.reshape(3, 12, k))
+        M[:, :, 3:6] = J[:, :, 3:6] @ inv_inertia_w[a]     # I_w⁻¹ is symmetric
+        M[:, :, 9:12] = J[:, :, 9:12] @ inv_inertia_w[b]
+    # From here on the contact-major arrays, with the sums in the same order
+    # as always: a resting stack is chaotic enough that a different rounding of
+    # W shows up in where its boxes end up.
+    # Each body's part of the normal's inverse effective mass (the course's
     # denominator is their sum); they also weight the two restitutions
-    k_a = np.einsum("ki,ki->k", J[:, 0, :6], M[:, 0, :6])
-    k_b = np.einsum("ki,ki->k", J[:, 0, 6:], M[:, 0, 6:])
+    k_a = _einsum("ki,ki->k", J[:, 0, :6], M[:, 0, :6])
+    k_b = _einsum("ki,ki->k", J[:, 0, 6:], M[:, 0, 6:])
     if split is not None:
         Ms = M.copy()
         Ms[:, :, :6] *= split[:, 0, None, None]
@@ -136,26 +159,22 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
         Ms = M
     W = np.empty((k, 3, 3))
     for c in range(3):
-        W[:, :, c] = np.einsum("kri,ki->kr", J, Ms[:, c, :])
+        W[:, :, c] = _einsum("kri,ki->kr", J, Ms[:, c, :])
     mass_n = 1.0 / np.maximum(W[:, 0, 0], _TINY)
     w_tn = W[:, 1:, 0]
     det = W[:, 1, 1] * W[:, 2, 2] - W[:, 1, 2] * W[:, 2, 1]
     inv_det = 1.0 / np.where(np.abs(det) > _TINY, det, _TINY)
-    wtt_inv = np.empty((k, 2, 2))
-    wtt_inv[:, 0, 0] = W[:, 2, 2] * inv_det
-    wtt_inv[:, 1, 1] = W[:, 1, 1] * inv_det
-    wtt_inv[:, 0, 1] = -W[:, 1, 2] * inv_det
-    wtt_inv[:, 1, 0] = -W[:, 2, 1] * inv_det
+    # [[W22, −W12], [−W21, W11]] / det
+    wtt_inv = (W[:, 1:, 1:][:, ::-1, ::-1].transpose(0, 2, 1) * _COFACTOR) * inv_det[:, None, None]
     Js = np.empty_like(J)
-    Js[:, 0, :] = J[:, 0, :] * mass_n[:, None]
+    np.multiply(J[:, 0, :], mass_n[:, None], out=Js[:, 0, :])
     J1, J2 = J[:, 1, :], J[:, 2, :]
     Js[:, 1, :] = wtt_inv[:, 0, 0, None] * J1 + wtt_inv[:, 0, 1, None] * J2
     Js[:, 2, :] = wtt_inv[:, 1, 0, None] * J1 + wtt_inv[:, 1, 1, None] * J2
-    g_tn = np.einsum("kij,kj->ki", wtt_inv, w_tn)
+    g_tn = _einsum("kij,kj->ki", wtt_inv, w_tn)
     mu_s, mu_k = friction.coefficients(model, a, b)
     e = restitution.pair_restitution(model, a, b, k_a, k_b, params.restitution_combine)
-    ab = np.stack([a, b], axis=1)
-    u0 = np.einsum("kri,ki->kr", J, V[ab].reshape(k, 12))
+    u0 = _einsum("kri,ki->kr", J, V[ab].reshape(k, 12))
     # Separation at the start of the step, linearised: the detected (end) pose
     # came from moving with u0, so s0 = s_end − h u0_n. A body moved back to its
     # time of impact already sits at the start of its remaining motion.
@@ -170,6 +189,12 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
     bias = -np.maximum(s0, 0.0) / h
     return ContactRows(a=a, b=b, key=m.key, point=m.point, normal=n, tangent=D[:, 1:, :],
                        depth=m.depth, ab=ab, J=J, M=M, mass_n=mass_n, w_tn=w_tn,
-                       wtt=W[:, 1:, 1:].copy(), wtt_inv=wtt_inv, Js=Js, mass_bias=mass_n * bias, g_tn=g_tn, mu_s=mu_s, mu_k=mu_k, mu=mu_k.copy(), sliding=np.ones(k, bool), e=e, u0=u0, bias=bias,
-                       lam=np.zeros((k, 3)), bounds=np.array([0, k]),
+                       wtt=W[:, 1:, 1:], wtt_inv=wtt_inv, Js=Js, mass_bias=mass_n * bias,
+                       g_tn=g_tn, mu_s=mu_s, mu_k=mu_k, mu=mu_k, sliding=np.ones(k, bool), e=e,
+                       u0=u0, bias=bias, lam=np.zeros((k, 3)), bounds=np.array([0, k]),
                        split=np.ones((k, 2)) if split is None else split, summed_from=k)
+
+
+def _rows_first_inverse(a):
+    """(k, …) → (…, k) C-ordered: the contacts on the last axis."""
+    return np.ascontiguousarray(np.moveaxis(a, 0, -1))

@@ -40,19 +40,25 @@ def tangent_basis(normal):
     """(t1, t2), each (k, 3): an orthonormal basis of the plane ⟂ n, from n
     alone (Duff et al. 2017, "Building an orthonormal basis, revisited":
     branch-free, continuous except across n_z = 0, never NaN for a unit n)."""
+    D = tangent_frame(normal)
+    return D[:, 1], D[:, 2]
+
+
+def tangent_frame(normal):
+    """(k, 3, 3) rows n, t1, t2: the normal and tangent_basis' two tangents."""
     nx, ny, nz = normal[:, 0], normal[:, 1], normal[:, 2]
+    D = np.empty((len(normal), 3, 3))
+    D[:, 0] = normal
     sign = np.copysign(1.0, nz)
     a = -1.0 / (sign + nz)
     b = nx * ny * a
-    t1 = np.empty_like(normal)
-    t2 = np.empty_like(normal)
-    t1[:, 0] = 1.0 + sign * nx * nx * a
-    t1[:, 1] = sign * b
-    t1[:, 2] = -sign * nx
-    t2[:, 0] = b
-    t2[:, 1] = sign + ny * ny * a
-    t2[:, 2] = -ny
-    return t1, t2
+    D[:, 1, 0] = 1.0 + sign * nx * nx * a
+    D[:, 1, 1] = sign * b
+    D[:, 1, 2] = -sign * nx
+    D[:, 2, 0] = b
+    D[:, 2, 1] = sign + ny * ny * a
+    D[:, 2, 2] = -ny
+    return D
 
 
 def cap(lam_t, lam_n, mu, sliding, slip_velocity):

@@ -142,6 +142,12 @@ def _kernel_rows(model, a, b, margin, pos=None, quat=None, pair_poses=None):
     Poses come either per body (pos, quat indexed by body) or per pair
     (pair_poses = (pa, qa, pb, qb), one row per pair)."""
     ta, tb = model.shape_type.take(a), model.shape_type.take(b)
+    if len(a):
+        # one kind of pair only (spheres on a floor, a box pile): no grouping
+        code = ta * _CODES + tb
+        one = _ONE_KIND.get(int(code[0]))
+        if one is not None and (code == code[0]).all():
+            return _one_kind(model, a, b, margin, pos, quat, pair_poses, *one)
     parts = []
     for first, second, kernel, turns in KERNELS:
         direct, swapped = _kind_rows(ta, tb, first, second)
@@ -171,6 +177,29 @@ def _kernel_rows(model, a, b, margin, pos=None, quat=None, pair_poses=None):
     return tuple(np.concatenate(col) for col in zip(*parts))
 
 
+_CODES = 8      # shape codes are below this
+# pair kind code -> (kernel, uses orientations, stored the other way round)
+_ONE_KIND = {}
+for _first, _second, _kernel, _turns in KERNELS:
+    _ONE_KIND[_first * _CODES + _second] = (_kernel, _turns, False)
+    _ONE_KIND.setdefault(_second * _CODES + _first, (_kernel, _turns, True))
+
+
+def _one_kind(model, a, b, margin, pos, quat, pair_poses, kernel, turns, swapped):
+    """_kernel_rows when every pair is of one kind: the kernel runs on the pairs as given."""
+    f, s = (b, a) if swapped else (a, b)
+    qf = qs = None
+    if pair_poses is None:
+        pf, ps = pos.take(f, axis=0), pos.take(s, axis=0)
+        if turns:
+            qf, qs = quat.take(f, axis=0), quat.take(s, axis=0)
+    else:
+        pa, qa, pb, qb = pair_poses
+        pf, ps, qf, qs = (pb, pa, qb, qa) if swapped else (pa, pb, qa, qb)
+    row, slot, point, normal, depth = kernel(model, f, s, pf, qf, ps, qs, margin)
+    return row, slot, point, (-normal if swapped else normal), depth
+
+
 def _manifold(model, a, b, rows) -> Manifold:
     pair, slot, point, normal, depth = rows
     a, b = a.take(pair), b.take(pair)
@@ -198,8 +227,11 @@ def collide(model, pos, quat, margin: float = 0.0, pairs=None) -> Manifold:
     if len(a) == 0:
         return Manifold.empty()
     rows = _kernel_rows(model, a, b, margin, pos=pos, quat=quat)
-    keep = np.flatnonzero(rows[4] > -margin)
-    m = _manifold(model, a, b, tuple(c.take(keep, axis=0) for c in rows))
+    near = rows[4] > -margin
+    if not near.all():
+        keep = np.flatnonzero(near)
+        rows = tuple(c.take(keep, axis=0) for c in rows)
+    m = _manifold(model, a, b, rows)
     # pairs come sorted; rows need a sort only when several kinds or slots interleave
     return m if np.all(m.key[1:] > m.key[:-1]) else m.sorted_by_key()
 
