@@ -18,17 +18,31 @@ from . import toi
 from .broadphase import bounding_radius
 
 
-def ccd(world, h, params, scratch):
+class CcdConstants:
+    """What the cheap test below needs of the model, computed once."""
+
+    def __init__(self, model, params):
+        self.twice_radius = 2.0 * bounding_radius(model)
+        self.fast_beyond = params.ccd_threshold * toi.smallest_half_size(model)
+
+
+def ccd(world, h, params, scratch, consts=None):
     model, s = world.model, world.state
     scratch.rewound = None
-    moving = ~model.is_static & s.awake
+    consts = consts or CcdConstants(model, params)
     p0, q0 = world.prev_pos, world.prev_quat
     # cheap bound first: no point moves further than |Δc| + R θ, θ ≈ |ω| h (taken
-    # twice, as the integrator's ω may differ within the substep)
+    # twice, as the integrator's ω may differ within the substep); a sleeping
+    # body has not moved (reach 0) and static ones have an infinite threshold
+    # only if they are planes, so they are masked out below
     d = s.pos - p0
-    reach = np.sqrt(np.einsum("ij,ij->i", d, d)) + 2.0 * bounding_radius(model) * h * np.sqrt(
+    reach = np.sqrt(np.einsum("ij,ij->i", d, d)) + consts.twice_radius * h * np.sqrt(
         np.einsum("ij,ij->i", s.omega, s.omega))
-    if not np.count_nonzero(moving & (reach > params.ccd_threshold * toi.smallest_half_size(model))):
+    over = reach > consts.fast_beyond
+    if not over.any():
+        return
+    moving = ~model.is_static & s.awake
+    if not np.count_nonzero(moving & over):
         return
     fast = moving & toi.fast_body_mask(model, p0, s.pos, params.ccd_threshold,
                                        prev_quat=q0, quat=s.quat)

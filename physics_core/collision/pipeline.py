@@ -2,6 +2,7 @@
 import numpy as np
 
 from .. import quaternion as qt
+from ..alloc import keep_freed_memory
 from . import contact_rows, restitution, sleep, solver
 from .coloring import batches, color_contacts
 from .events import EventAccumulator
@@ -32,6 +33,7 @@ class ContactScratch:
         self.colour_awake = None
         self.colour = None
         self.colour_of = None     # (k,) colour of each contact of colour_key
+        self.colour_in_order = False   # the colouring's order is the identity
         self.fresh_colours = 0    # colours of the last colouring from scratch
 
 
@@ -62,12 +64,14 @@ class ContactPipeline:
         # bodies whose principal moments are equal have I_w⁻¹ = I⁻¹ 1 in any pose
         I = model.inertia
         self.isotropic = bool(np.all(np.ptp(I, axis=1) <= 1e-12 * np.max(I, axis=1)))
+        keep_freed_memory()     # the contact arrays are reallocated every substep (alloc.py)
 
     def stages(self):
         out = []
         if self.p.ccd:
-            from .ccd_stage import ccd
-            out.append(("ccd", lambda world, h: ccd(world, h, self.p, self.scratch(world))))
+            from .ccd_stage import CcdConstants, ccd
+            consts = CcdConstants(self.model, self.p)
+            out.append(("ccd", lambda world, h: ccd(world, h, self.p, self.scratch(world), consts)))
         out += [("collide", self.collide), ("solve", self.solve),
                 ("restitution", self.restitution), ("correct", self.correct),
                 ("events", self.events)]
@@ -93,13 +97,13 @@ class ContactPipeline:
             sc.events.reset()
         if p.sleep:
             sc.sleep.sync(s.awake)
-        if np.count_nonzero(s.awake & ~model.is_static):
+        moving = ~model.is_static & s.awake
+        if moving.any():
             m = detect(model, s.pos, s.quat, p.margin, sc.pairs)
         else:
             m = Manifold.empty()     # all asleep: nothing can start touching
-        if p.sleep and len(m):
-            sleep.wake_touched(world, sc.sleep, m.a, m.b, m.depth, p)
-        moving = ~model.is_static & s.awake
+        if p.sleep and len(m) and sleep.wake_touched(world, sc.sleep, m.a, m.b, m.depth, p):
+            moving = ~model.is_static & s.awake
         if len(m):
             keep = moving[m.a] | moving[m.b]
             if not keep.all():
@@ -111,7 +115,8 @@ class ContactPipeline:
             sc.rewound = None
             return
         order, bounds, summed_from = self._batches(sc, m, moving)
-        m = m.take(order)
+        if not sc.colour_in_order:
+            m = m.take(order)
         V = contact_rows.body_velocities(s)
         sc.V0 = V.copy()
         inv_mass = world.inv_mass[:, 0]
@@ -133,8 +138,8 @@ class ContactPipeline:
         rows.summed_from = summed_from
         # a new contact starts held by static friction; from its next substep
         # on, its slip after the solve tells whether it slides
-        slip = np.nan_to_num(sc.warm.load(rows, p.warm_start), nan=0.0)
-        rows.sliding = slip > p.static_friction_speed
+        slip = sc.warm.load(rows, p.warm_start)
+        rows.sliding = slip > p.static_friction_speed      # NaN (new contact): False
         rows.mu = np.where(rows.sliding, rows.mu_k, rows.mu_s)
         sc.rows, sc.V = rows, V
 
@@ -143,6 +148,7 @@ class ContactPipeline:
         and the first row of the trailing batch solved with summed updates."""
         k = len(m)
         if self.summed:
+            sc.colour_in_order = True
             return np.arange(k), np.array([0, k]), 0
         if (sc.colour is not None and np.array_equal(sc.colour_key, m.key)
                 and np.array_equal(sc.colour_awake, moving)):
@@ -164,6 +170,7 @@ class ContactPipeline:
             sc.fresh_colours = len(bounds) - 1
         sc.colour = order, *merge_tail(bounds, self.p.tail_fraction)
         sc.colour_key, sc.colour_awake, sc.colour_of = m.key, moving, colour
+        sc.colour_in_order = bool(np.all(order[1:] > order[:-1]))    # no reordering to do
         return sc.colour
 
     # ---- solve -------------------------------------------------------------

@@ -11,21 +11,26 @@ import numpy as np
 
 
 class WarmCache:
+    """Kept in the order of the rows they came from: from one substep to the
+    next the contacts are usually the same, in the same order, and then the
+    impulses are read back with no search at all."""
+
     def __init__(self):
-        self.key = np.zeros(0, dtype=np.int64)   # sorted
+        self.key = np.zeros(0, dtype=np.int64)   # in row order
         self.normal = np.zeros(0)
         self.friction = np.zeros((0, 3))
         self.slip = np.zeros(0)
+        self._sorted = None                      # (order, keys in ascending order), on demand
 
     def store(self, rows, slip):
         """Keep this substep's impulses and each contact's final slip speed (m/s)."""
-        order = np.argsort(rows.key, kind="stable")
-        self.slip = slip[order]
-        lam = rows.lam[order]
-        tan = rows.tangent[order]
-        self.key = rows.key[order]
+        lam = rows.lam
+        tan = rows.tangent
+        self.slip = slip
+        self.key = rows.key
         self.normal = lam[:, 0].copy()
         self.friction = lam[:, 1:2] * tan[:, 0] + lam[:, 2:3] * tan[:, 1]
+        self._sorted = None
 
     def clear(self):
         self.__init__()
@@ -33,19 +38,31 @@ class WarmCache:
     def load(self, rows, fraction):
         """Set rows.lam from the cache (× fraction) for keys seen last substep.
         Returns each row's slip speed at the end of last substep (NaN: new contact)."""
+        if len(rows) and np.array_equal(self.key, rows.key):
+            slip = self.slip.copy()
+            if fraction > 0.0:
+                self._apply(rows, slice(None), slice(None), fraction)
+            return slip
         slip = np.full(len(rows), np.nan)
         if not len(self.key) or not len(rows):
             return slip
-        i = np.minimum(np.searchsorted(self.key, rows.key), len(self.key) - 1)
-        hit = np.flatnonzero(self.key[i] == rows.key)
+        if self._sorted is None:
+            order = np.argsort(self.key, kind="stable")
+            self._sorted = order, self.key[order]
+        order, keys = self._sorted
+        i = np.minimum(np.searchsorted(keys, rows.key), len(keys) - 1)
+        hit = np.flatnonzero(keys[i] == rows.key)
         if not len(hit):
             return slip
-        j = i[hit]
+        j = order[i[hit]]
         slip[hit] = self.slip[j]
-        if fraction <= 0.0:
-            return slip
-        f = self.friction[j]
-        rows.lam[hit, 0] = fraction * self.normal[j]
-        rows.lam[hit, 1] = fraction * np.einsum("ij,ij->i", f, rows.tangent[hit, 0])
-        rows.lam[hit, 2] = fraction * np.einsum("ij,ij->i", f, rows.tangent[hit, 1])
+        if fraction > 0.0:
+            self._apply(rows, hit, j, fraction)
         return slip
+
+    def _apply(self, rows, hit, j, fraction):
+        f = self.friction[j]
+        tan = rows.tangent[hit]
+        rows.lam[hit, 0] = fraction * self.normal[j]
+        rows.lam[hit, 1] = fraction * np.einsum("ij,ij->i", f, tan[:, 0])
+        rows.lam[hit, 2] = fraction * np.einsum("ij,ij->i", f, tan[:, 1])
