@@ -59,6 +59,7 @@ class ContactRows:
     bounds: np.ndarray     # batch boundaries (rows are sorted by batch)
     split: np.ndarray      # (k, 2) mass-splitting factors of the two bodies (1 without)
     summed_from: int = 0   # rows from here on share bodies within their batch (Jacobi, summed)
+    flat6: np.ndarray = None   # (k, 12) flat indices of (V_a, V_b) in V.reshape(-1), made on first use
 
     def __len__(self):
         return len(self.a)
@@ -96,8 +97,8 @@ _COFACTOR = np.array([[1.0, -1.0], [-1.0, 1.0]])   # the signs of a 2×2 inverse
 
 
 def _rows_first(a):
-    """(…, k) computed with the contacts on the last axis → (k, …) C-ordered."""
-    return np.ascontiguousarray(np.moveaxis(a, -1, 0))
+    """(r, c, k) computed with the contacts on the last axis → (k, r, c) C-ordered."""
+    return np.ascontiguousarray(a.transpose(2, 0, 1))
 
 
 def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=None, rewound=None):
@@ -118,10 +119,11 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
     a, b, n = m.a, m.b, m.normal
     k = len(a)
     ab = np.stack([a, b], axis=1)
-    D = friction.tangent_frame(n)                          # (k, 3 rows, 3)
-    DT = _rows_first_inverse(D)                            # (3 rows, 3, k)
+    DT = friction.tangent_frame_last(n)                    # (3 rows, 3, k)
+    tangent = _rows_first(DT[1:])                          # (k, 2, 3) t1, t2
     # lever arms, signed by side: −r_A, +r_B (2, 3, k)
-    r = _rows_first_inverse(m.point[:, None, :] - pos[ab]) * _SIDE
+    r = np.empty((2, 3, k))
+    np.multiply((m.point[:, None, :] - pos[ab]).transpose(1, 2, 0), _SIDE, out=r)
     # J as (row, body, linear | angular, xyz, k): (side d, r_side × d)
     JT = np.empty((3, 2, 2, 3, k))
     np.multiply(DT[:, None], _SIDE, out=JT[:, :, 0])
@@ -135,13 +137,12 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
     # ones take I_w⁻¹, a scalar for isotropic bodies, a 3×3 product otherwise
     MT = np.empty_like(JT)
     np.multiply(JT[:, :, 0], inv_mass[ab].T[None, :, None], out=MT[:, :, 0])
+    J = _rows_first(JT.reshape(3, 12, k))
     if inv_inertia_w is None:
         np.multiply(ang, iso_inv[ab].T[None, :, None], out=MT[:, :, 1])
         M = _rows_first(MT.reshape(3, 12, k))
-        J = _rows_first(JT.reshape(3, 12, k))
     else:
-        J = _rows_first(JT.reshape(3, 12, k))
-        M = _rows_first(MT.reshape(3, 12, k))
+        M = _rows_first(MT.reshape(3, 12, k))     # angular columns written next
         M[:, :, 3:6] = J[:, :, 3:6] @ inv_inertia_w[a]     # I_w⁻¹ is symmetric
         M[:, :, 9:12] = J[:, :, 9:12] @ inv_inertia_w[b]
     # From here on the contact-major arrays, with the sums in the same order
@@ -187,14 +188,10 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
     # already overlapping (s0 < 0): just stop approaching, the overlap is
     # removed by the position pass, never by adding velocity.
     bias = -np.maximum(s0, 0.0) / h
-    return ContactRows(a=a, b=b, key=m.key, point=m.point, normal=n, tangent=D[:, 1:, :],
+    return ContactRows(a=a, b=b, key=m.key, point=m.point, normal=n, tangent=tangent,
                        depth=m.depth, ab=ab, J=J, M=M, mass_n=mass_n, w_tn=w_tn,
                        wtt=W[:, 1:, 1:], wtt_inv=wtt_inv, Js=Js, mass_bias=mass_n * bias,
                        g_tn=g_tn, mu_s=mu_s, mu_k=mu_k, mu=mu_k, sliding=np.ones(k, bool), e=e,
                        u0=u0, bias=bias, lam=np.zeros((k, 3)), bounds=np.array([0, k]),
                        split=np.ones((k, 2)) if split is None else split, summed_from=k)
 
-
-def _rows_first_inverse(a):
-    """(k, …) → (…, k) C-ordered: the contacts on the last axis."""
-    return np.ascontiguousarray(np.moveaxis(a, 0, -1))

@@ -31,13 +31,24 @@ class EventAccumulator:
             return
         lam = rows.lam
         touching = (rows.depth >= 0.0) | (lam[:, 0] > 0.0)
+        key = rows.key
+        if touching.all() and np.all(key[1:] > key[:-1]):
+            # every contact touches and they are in key order already (a resting
+            # scene, one colour): the rows' own arrays, no gathers (rows are built
+            # afresh each substep, so nothing writes to them afterwards)
+            tan = rows.tangent
+            ft = lam[:, 1:2] * tan[:, 0] + lam[:, 2:3] * tan[:, 1]
+            self.parts.append(dict(key=key, a=rows.a, b=rows.b, point=rows.point, normal=rows.normal,
+                                   depth=rows.depth, impulse=lam[:, 0], friction=ft,
+                                   speed=-rows.u0[:, 0]))
+            return
         if not touching.any():
             return
         t = np.flatnonzero(touching)
-        t = t[np.argsort(rows.key[t], kind="stable")]
+        t = t[np.argsort(key[t], kind="stable")]
         ft = lam[t, 1:2] * rows.tangent[t, 0] + lam[t, 2:3] * rows.tangent[t, 1]
         self.parts.append(dict(
-            key=rows.key[t], a=rows.a[t], b=rows.b[t], point=rows.point[t], normal=rows.normal[t],
+            key=key[t], a=rows.a[t], b=rows.b[t], point=rows.point[t], normal=rows.normal[t],
             depth=rows.depth[t], impulse=lam[t, 0], friction=ft,
             speed=-rows.u0[t, 0]))
 
@@ -49,14 +60,15 @@ class EventAccumulator:
         if cur is None and prev is None:
             self.parts = []
             return ContactEvents.empty()
+        if cur is not None and prev is not None and np.array_equal(cur["key"], prev["key"]):
+            # the same contacts as last step: all persist, none ended or froze
+            self.prev = cur
+            self.parts = []
+            return ContactEvents(**_columns(cur, np.full(len(cur["key"]), PERSIST, dtype=np.uint8)))
         cols = {}
         if cur is not None:
             known = _member(cur["key"], prev["key"]) if prev is not None else np.zeros(len(cur["key"]), bool)
-            ev = np.where(known, PERSIST, BEGIN).astype(np.uint8)
-            cols = dict(point=cur["point"], normal=cur["normal"], impulse=cur["impulse"],
-                        friction_impulse=np.sqrt(np.einsum("ij,ij->i", cur["friction"], cur["friction"])),
-                        normal_speed=cur["speed"], depth=cur["depth"], body_a=cur["a"],
-                        body_b=cur["b"], event=ev)
+            cols = _columns(cur, np.where(known, PERSIST, BEGIN).astype(np.uint8))
         frozen = None
         if prev is not None:
             gone = ~_member(prev["key"], cur["key"]) if cur is not None else np.ones(len(prev["key"]), bool)
@@ -95,6 +107,14 @@ class EventAccumulator:
         return dict(key=keys, a=cat["a"][last], b=cat["b"][last], point=cat["point"][last],
                     normal=cat["normal"][last], depth=cat["depth"][last], impulse=impulse,
                     friction=fr, speed=speed)
+
+
+def _columns(cur, event):
+    """ContactEvents columns of this step's touching contacts."""
+    return dict(point=cur["point"], normal=cur["normal"], impulse=cur["impulse"],
+                friction_impulse=np.sqrt(np.einsum("ij,ij->i", cur["friction"], cur["friction"])),
+                normal_speed=cur["speed"], depth=cur["depth"], body_a=cur["a"],
+                body_b=cur["b"], event=event)
 
 
 def _union(cur, frozen):

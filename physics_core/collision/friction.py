@@ -45,19 +45,25 @@ def tangent_basis(normal):
 
 
 def tangent_frame(normal):
-    """(k, 3, 3) rows n, t1, t2: the normal and tangent_basis' two tangents."""
+    """(k, 3, 3) rows n, t1, t2: the normal and tangent_basis' two tangents
+    (a view of tangent_frame_last's array)."""
+    return tangent_frame_last(normal).transpose(2, 0, 1)
+
+
+def tangent_frame_last(normal):
+    """tangent_frame with the contacts on the last axis: (3 rows, 3, k), C-ordered."""
     nx, ny, nz = normal[:, 0], normal[:, 1], normal[:, 2]
-    D = np.empty((len(normal), 3, 3))
-    D[:, 0] = normal
+    D = np.empty((3, 3, len(normal)))
+    D[0] = normal.T
     sign = np.copysign(1.0, nz)
     a = -1.0 / (sign + nz)
     b = nx * ny * a
-    D[:, 1, 0] = 1.0 + sign * nx * nx * a
-    D[:, 1, 1] = sign * b
-    D[:, 1, 2] = -sign * nx
-    D[:, 2, 0] = b
-    D[:, 2, 1] = sign + ny * ny * a
-    D[:, 2, 2] = -ny
+    D[1, 0] = 1.0 + sign * nx * nx * a
+    D[1, 1] = sign * b
+    D[1, 2] = -sign * nx
+    D[2, 0] = b
+    D[2, 1] = sign + ny * ny * a
+    D[2, 2] = -ny
     return D
 
 

@@ -44,6 +44,13 @@ def flat_index(ab, width):
     return (ab[:, :, None] * width + np.arange(width)).reshape(len(ab), 2 * width)
 
 
+def flat6(rows):
+    """rows' flat_index(ab, 6), made once per set of rows (warm start, solve, slip)."""
+    if rows.flat6 is None:
+        rows.flat6 = flat_index(rows.ab, 6)
+    return rows.flat6
+
+
 def _groups(rows, sel, summed):
     """The sorted row indices `sel` split by batch, each with its summed flag."""
     bd = rows.bounds
@@ -62,7 +69,7 @@ def _scatter(Vf, idx, new, delta, summed):
 
 def tangential_slip(V, rows):
     """(k,) speed of sliding at each contact, |v_t|, with the velocities V."""
-    u = _einsum("kri,ki->kr", rows.J[:, 1:, :], V.reshape(-1).take(flat_index(rows.ab, 6)))
+    u = _einsum("kri,ki->kr", rows.J[:, 1:, :], V.reshape(-1).take(flat6(rows)))
     return np.sqrt(_einsum("ij,ij->i", u, u))
 
 
@@ -72,7 +79,7 @@ def warm_start(V, rows, summed):
         return
     d = _einsum("kr,kri->ki", rows.lam, rows.M)
     Vf = V.reshape(-1)
-    Vf += np.bincount(flat_index(rows.ab, 6).reshape(-1), d.reshape(-1), len(Vf))
+    Vf += np.bincount(flat6(rows).reshape(-1), d.reshape(-1), len(Vf))
 
 
 def solve_velocities(V, rows, iterations, summed, tolerance=0.0):
@@ -82,8 +89,9 @@ def solve_velocities(V, rows, iterations, summed, tolerance=0.0):
     Returns the number of sweeps done."""
     Vf = V.reshape(-1)
     views = []
+    idx6 = flat6(rows)
     for s, sum_s in _slices(rows):
-        views.append((sum_s or summed, flat_index(rows.ab[s], 6), rows.Js[s], rows.M[s], rows.mass_bias[s],
+        views.append((sum_s or summed, idx6[s], rows.Js[s], rows.M[s], rows.mass_bias[s],
                       rows.g_tn[s], rows.mu[s], rows.sliding[s], rows.lam[s], rows.wtt[s], rows.w_tn[s],
                       bool(np.count_nonzero(rows.sliding[s]))))
     lam = rows.lam
@@ -123,7 +131,7 @@ def solve_normal_targets(V, rows, target, active, iterations, summed):
     lam = rows.lam
     for _ in range(iterations):
         for g, sum_g in groups:
-            idx = flat_index(rows.ab[g], 6)
+            idx = flat6(rows)[g]
             VAB = Vf.take(idx)
             un = _einsum("ki,ki->k", rows.J[g, 0, :], VAB)
             ln_old = lam[g, 0]
