@@ -220,12 +220,16 @@ def plane_clearance(model, pos, quat, bodies=None, rows=None):
     array, so they agree to the last bit."""
     rows = rows or ModelRows(model)
     planes = rows.planes
-    if bodies is None:
+    own = bodies is None
+    if own:
         bodies = rows.plane_bodies
     if len(planes) == 0 or len(bodies) == 0:
         return planes, bodies, None
-    n = model.plane_normal[planes]                                  # (P, 3)
-    height = pos[bodies] @ n.T - model.plane_offset[planes]         # (B, P)
+    n = rows.plane_normal                                           # (P, 3)
+    height = pos[bodies] @ n.T - rows.plane_offset                  # (B, P)
+    if own and not rows.plane_box_bodies:
+        # spheres only: the support is the radius whatever the orientation
+        return planes, bodies, height - rows.plane_support
     return planes, bodies, height - support_along(model, quat, bodies, n)
 
 
@@ -294,3 +298,7 @@ class ModelRows:
         self.plane_bodies = np.flatnonzero(~model.is_static & (st != PLANE))
         self.radius = bounding_radius(model)
         self.box = np.flatnonzero(st == BOX)
+        self.plane_normal = model.plane_normal[self.planes]
+        self.plane_offset = model.plane_offset[self.planes]
+        self.plane_box_bodies = bool(np.any(st[self.plane_bodies] == BOX))
+        self.plane_support = np.repeat(model.radius[self.plane_bodies, None], len(self.planes), axis=1)

@@ -63,6 +63,10 @@ class PairCache:
     def _still_valid(self, pos, quat):
         """Has every body moved (and, for boxes, turned) less than the list allows?"""
         d = pos - self.pos0
+        limit = REBUILD_AT * self.skin
+        if not len(self.turners):
+            # no turn term: compare squared lengths (NaN compares False: rebuild)
+            return bool(np.einsum("ij,ij->i", d, d).max(initial=0.0) <= limit * limit)
         move = np.sqrt(np.einsum("ij,ij->i", d, d))
         if len(self.turners):
             t = self.turners
@@ -72,7 +76,7 @@ class PairCache:
             chord = np.sqrt(np.einsum("ij,ij->i", dq, dq))
             move[t] += self.turn_reach * 4.0 * np.arcsin(np.minimum(0.5 * chord, 1.0))
         # NaN (a body gone non-finite) compares False: rebuild, as from scratch
-        return bool(move.max(initial=0.0) <= REBUILD_AT * self.skin)
+        return bool(move.max(initial=0.0) <= limit)
 
     def _build(self, model, pos, quat, margin):
         fat = margin + self.skin

@@ -229,7 +229,7 @@ class ContactPipeline:
             dV *= np.where(hit, after, 1.0)[:, None]
         if sc.rewound is not None:
             dV[sc.rewound] = 0.0     # moved back to their time of impact: stay there
-        dsep = np.einsum("ki,ki->k", rows.J[:, 0, :], dV[rows.ab].reshape(-1, 12)) * h
+        dsep = np.einsum("ki,ki->k", rows.J[:, 0, :], dV.reshape(-1).take(solver.flat6(rows))) * h
         sep = dsep - rows.depth
         target = np.minimum(p.correction_rate * (-sep - p.slop) / h, p.max_correction_speed)
         dX = dV
