@@ -137,19 +137,50 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
     # ones take I_w⁻¹, a scalar for isotropic bodies, a 3×3 product otherwise
     MT = np.empty_like(JT)
     np.multiply(JT[:, :, 0], inv_mass[ab].T[None, :, None], out=MT[:, :, 0])
-    J = _rows_first(JT.reshape(3, 12, k))
     if inv_inertia_w is None:
         np.multiply(ang, iso_inv[ab].T[None, :, None], out=MT[:, :, 1])
+        VT = np.ascontiguousarray(V[ab].reshape(k, 12).T)
+        k_a, k_b, mass_n, w_tn, wtt, wtt_inv, Js, g_tn, u0 = _terms_last(JT, MT, VT, split)
+        J = _rows_first(JT.reshape(3, 12, k))
         M = _rows_first(MT.reshape(3, 12, k))
     else:
+        J = _rows_first(JT.reshape(3, 12, k))
         M = _rows_first(MT.reshape(3, 12, k))     # angular columns written next
         M[:, :, 3:6] = J[:, :, 3:6] @ inv_inertia_w[a]     # I_w⁻¹ is symmetric
         M[:, :, 9:12] = J[:, :, 9:12] @ inv_inertia_w[b]
-    # From here on the contact-major arrays, with the sums in the same order
-    # as always: a resting stack is chaotic enough that a different rounding of
-    # W shows up in where its boxes end up.
-    # Each body's part of the normal's inverse effective mass (the course's
-    # denominator is their sum); they also weight the two restitutions
+        k_a, k_b, mass_n, w_tn, wtt, wtt_inv, Js, g_tn, u0 = _terms(J, M, V[ab].reshape(k, 12), split)
+    mu_s, mu_k = friction.coefficients(model, a, b)
+    e = restitution.pair_restitution(model, a, b, k_a, k_b, params.restitution_combine)
+    # Separation at the start of the step, linearised: the detected (end) pose
+    # came from moving with u0, so s0 = s_end − h u0_n. A body moved back to its
+    # time of impact already sits at the start of its remaining motion.
+    sep_end = -m.depth
+    s0 = sep_end - h * u0[:, 0]
+    if rewound is not None:
+        rw = rewound[a] | rewound[b]
+        s0 = np.where(rw, sep_end, s0)
+    # vn ≥ −s0/h: approach no faster than closes the gap in this step;
+    # already overlapping (s0 < 0): just stop approaching, the overlap is
+    # removed by the position pass, never by adding velocity.
+    bias = -np.maximum(s0, 0.0) / h
+    return ContactRows(a=a, b=b, key=m.key, point=m.point, normal=n, tangent=tangent,
+                       depth=m.depth, ab=ab, J=J, M=M, mass_n=mass_n, w_tn=w_tn,
+                       wtt=wtt, wtt_inv=wtt_inv, Js=Js, mass_bias=mass_n * bias,
+                       g_tn=g_tn, mu_s=mu_s, mu_k=mu_k, mu=mu_k, sliding=np.ones(k, bool), e=e,
+                       u0=u0, bias=bias, lam=np.zeros((k, 3)), bounds=np.array([0, k]),
+                       split=np.ones((k, 2)) if split is None else split, summed_from=k)
+
+
+
+def _terms(J, M, VAB, split):
+    """The solver's terms from contact-major J, M (k, 3, 12), with the sums in
+    the same order as always: a resting stack of boxes is chaotic enough that a
+    different rounding of W shows up in where its boxes end up.
+
+    W = J M⁻¹ Jᵀ (with the split inverse masses); k_a, k_b: each body's part of
+    the normal's inverse effective mass (the course's denominator is their
+    sum), which also weight the two restitutions."""
+    k = len(J)
     k_a = _einsum("ki,ki->k", J[:, 0, :6], M[:, 0, :6])
     k_b = _einsum("ki,ki->k", J[:, 0, 6:], M[:, 0, 6:])
     if split is not None:
@@ -173,25 +204,30 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
     Js[:, 1, :] = wtt_inv[:, 0, 0, None] * J1 + wtt_inv[:, 0, 1, None] * J2
     Js[:, 2, :] = wtt_inv[:, 1, 0, None] * J1 + wtt_inv[:, 1, 1, None] * J2
     g_tn = _einsum("kij,kj->ki", wtt_inv, w_tn)
-    mu_s, mu_k = friction.coefficients(model, a, b)
-    e = restitution.pair_restitution(model, a, b, k_a, k_b, params.restitution_combine)
-    u0 = _einsum("kri,ki->kr", J, V[ab].reshape(k, 12))
-    # Separation at the start of the step, linearised: the detected (end) pose
-    # came from moving with u0, so s0 = s_end − h u0_n. A body moved back to its
-    # time of impact already sits at the start of its remaining motion.
-    sep_end = -m.depth
-    s0 = sep_end - h * u0[:, 0]
-    if rewound is not None:
-        rw = rewound[a] | rewound[b]
-        s0 = np.where(rw, sep_end, s0)
-    # vn ≥ −s0/h: approach no faster than closes the gap in this step;
-    # already overlapping (s0 < 0): just stop approaching, the overlap is
-    # removed by the position pass, never by adding velocity.
-    bias = -np.maximum(s0, 0.0) / h
-    return ContactRows(a=a, b=b, key=m.key, point=m.point, normal=n, tangent=tangent,
-                       depth=m.depth, ab=ab, J=J, M=M, mass_n=mass_n, w_tn=w_tn,
-                       wtt=W[:, 1:, 1:], wtt_inv=wtt_inv, Js=Js, mass_bias=mass_n * bias,
-                       g_tn=g_tn, mu_s=mu_s, mu_k=mu_k, mu=mu_k, sliding=np.ones(k, bool), e=e,
-                       u0=u0, bias=bias, lam=np.zeros((k, 3)), bounds=np.array([0, k]),
-                       split=np.ones((k, 2)) if split is None else split, summed_from=k)
+    u0 = _einsum("kri,ki->kr", J, VAB)
+    return k_a, k_b, mass_n, w_tn, W[:, 1:, 1:], wtt_inv, Js, g_tn, u0
 
+
+def _terms_last(JT, MT, VT, split):
+    """_terms for rows built with the contacts on the last axis (JT, MT
+    (3, 2, 2, 3, k), VT (12, k)): every product runs over whole rows of k."""
+    k = JT.shape[-1]
+    Wb = (JT[:, None] * MT[None]).sum(axis=(3, 4))        # (r, c, body, k)
+    k_a, k_b = Wb[0, 0, 0], Wb[0, 0, 1]
+    if split is None:
+        W = Wb[:, :, 0] + Wb[:, :, 1]
+    else:
+        W = Wb[:, :, 0] * split[:, 0] + Wb[:, :, 1] * split[:, 1]
+    mass_n = 1.0 / np.maximum(W[0, 0], _TINY)
+    det = W[1, 1] * W[2, 2] - W[1, 2] * W[2, 1]
+    inv_det = 1.0 / np.where(np.abs(det) > _TINY, det, _TINY)
+    wtt_inv = W[1:, 1:][::-1, ::-1].transpose(1, 0, 2) * (_COFACTOR[:, :, None] * inv_det)
+    J = JT.reshape(3, 12, k)
+    JsT = np.empty((3, 12, k))
+    np.multiply(J[0], mass_n, out=JsT[0])
+    np.sum(wtt_inv[:, :, None] * J[None, 1:], axis=1, out=JsT[1:])
+    w_tn = W[1:, 0]
+    g_tn = (wtt_inv * w_tn).sum(axis=1)
+    u0 = (J * VT).sum(axis=1)
+    return (k_a, k_b, mass_n, w_tn.T, W[1:, 1:].transpose(2, 0, 1), wtt_inv.transpose(2, 0, 1),
+            _rows_first(JsT), g_tn.T, u0.T)
