@@ -73,6 +73,10 @@ class EventAccumulator:
         if prev is not None:
             gone = ~_member(prev["key"], cur["key"]) if cur is not None else np.ones(len(prev["key"]), bool)
             asleep = gone & ~moving[prev["a"]] & ~moving[prev["b"]]
+            if cur is None and asleep.all():
+                # a scene asleep: the frozen contacts stay as they are, nothing to report
+                self.parts = []
+                return ContactEvents.empty()
             if asleep.any():
                 frozen = {k: v[asleep] for k, v in prev.items()}
                 gone &= ~asleep
