@@ -58,9 +58,10 @@ class World:
             from .collision import build_contact_stages
             self._contact_stages = build_contact_stages(model)
         # Effects whose forces can turn a body; with none of these, no commanded
-        # torque and no spin, the rotational update is skipped.
+        # torque and no spin, the rotational update is skipped. Contacts change
+        # ω directly (not through forces), so the test is made per substep.
         self._model_torque = bool(
-            makes_torque(model) or self._contact_stages
+            makes_torque(model)
             or ("buoyancy" in model.effects and np.any(model.shape_type == BOX)))
         self.refresh_awake()
 
@@ -86,9 +87,9 @@ class World:
         if s.has_pending_impulse:
             self._timed("impulses", self._apply_impulses)
         h = self.model.dt / self.substeps
-        self.rotating = bool(self._model_torque or s.has_user_torque or s.omega.any())
         for sub in range(self.substeps):
             self.substep = sub
+            self.rotating = bool(self._model_torque or s.has_user_torque or s.omega.any())
             if self._contact_stages:
                 # start-of-substep pose, for time of impact and contact normals (COURSE.md 5)
                 self.prev_pos = s.pos.copy()
