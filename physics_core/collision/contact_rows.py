@@ -118,7 +118,9 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
     the solver contact-major, (k, 3, 12)."""
     a, b, n = m.a, m.b, m.normal
     k = len(a)
-    ab = np.stack([a, b], axis=1)
+    ab = np.empty((k, 2), np.int64)
+    ab[:, 0] = a
+    ab[:, 1] = b
     DT = friction.tangent_frame_last(n)                    # (3 rows, 3, k)
     tangent = _rows_first(DT[1:])                          # (k, 2, 3) t1, t2
     # lever arms, signed by side: −r_A, +r_B (2, 3, k)
@@ -225,7 +227,9 @@ def _terms_last(JT, MT, VT, split):
     J = JT.reshape(3, 12, k)
     JsT = np.empty((3, 12, k))
     np.multiply(J[0], mass_n, out=JsT[0])
-    np.sum(wtt_inv[:, :, None] * J[None, 1:], axis=1, out=JsT[1:])
+    J1, J2 = J[1], J[2]
+    JsT[1] = wtt_inv[0, 0] * J1 + wtt_inv[0, 1] * J2
+    JsT[2] = wtt_inv[1, 0] * J1 + wtt_inv[1, 1] * J2
     w_tn = W[1:, 0]
     g_tn = (wtt_inv * w_tn).sum(axis=1)
     u0 = (J * VT).sum(axis=1)

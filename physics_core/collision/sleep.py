@@ -82,6 +82,8 @@ def update(world, sleep_state, edges_a, edges_b, dt, params):
     model, s = world.model, world.state
     sleep_state.sync(s.awake)
     active = ~model.is_static & s.awake
+    if not active.any():
+        return          # everything asleep (or static): no timer runs
     v2 = np.einsum("ij,ij->i", s.vel, s.vel)
     w2 = np.einsum("ij,ij->i", s.omega, s.omega)
     resting = (v2 < params.sleep_linear_speed ** 2) & (w2 < params.sleep_angular_speed ** 2)
