@@ -60,6 +60,7 @@ class ContactRows:
     split: np.ndarray      # (k, 2) mass-splitting factors of the two bodies (1 without)
     summed_from: int = 0   # rows from here on share bodies within their batch (Jacobi, summed)
     flat6: np.ndarray = None   # (k, 12) flat indices of (V_a, V_b) in V.reshape(-1), made on first use
+    key_sorted: bool = False   # rows are in ascending key order (no colouring reorder)
 
     def __len__(self):
         return len(self.a)

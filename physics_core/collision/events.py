@@ -32,7 +32,7 @@ class EventAccumulator:
         lam = rows.lam
         touching = (rows.depth >= 0.0) | (lam[:, 0] > 0.0)
         key = rows.key
-        if touching.all() and np.all(key[1:] > key[:-1]):
+        if touching.all() and (rows.key_sorted or np.all(key[1:] > key[:-1])):
             # every contact touches and they are in key order already (a resting
             # scene, one colour): the rows' own arrays, no gathers (rows are built
             # afresh each substep, so nothing writes to them afterwards)

@@ -136,6 +136,7 @@ class ContactPipeline:
         rows = contact_rows.build(model, m, s.pos, inv_mass, iw, iso, V, h, p, split, sc.rewound)
         rows.bounds = bounds
         rows.summed_from = summed_from
+        rows.key_sorted = sc.colour_in_order      # detect's rows come in key order
         # a new contact starts held by static friction; from its next substep
         # on, its slip after the solve tells whether it slides
         slip = sc.warm.load(rows, p.warm_start)
@@ -239,8 +240,8 @@ class ContactPipeline:
             dX = dV.copy()
             dX[:, :3] += Xp
         s.pos += dX[:, :3] * h
-        turn = np.flatnonzero(dX[:, 3:].any(axis=1))
-        if len(turn):
+        if dX[:, 3:].any():
+            turn = np.flatnonzero(dX[:, 3:].any(axis=1))
             s.quat[turn] = qt.integrate(s.quat[turn], dX[turn, 3:], h)
         sc.rewound = None
 

@@ -63,6 +63,9 @@ class WarmCache:
     def _apply(self, rows, hit, j, fraction):
         f = self.friction[j]
         tan = rows.tangent[hit]
-        rows.lam[hit, 0] = fraction * self.normal[j]
-        rows.lam[hit, 1] = fraction * np.einsum("ij,ij->i", f, tan[:, 0])
-        rows.lam[hit, 2] = fraction * np.einsum("ij,ij->i", f, tan[:, 1])
+        lam = rows.lam
+        lam[hit, 0] = self.normal[j]
+        lam[hit, 1] = np.einsum("ij,ij->i", f, tan[:, 0])
+        lam[hit, 2] = np.einsum("ij,ij->i", f, tan[:, 1])
+        if fraction != 1.0:
+            lam[hit] *= fraction
