@@ -215,7 +215,7 @@ def _terms_last(JT, MT, VT, split):
     """_terms for rows built with the contacts on the last axis (JT, MT
     (3, 2, 2, 3, k), VT (12, k)): every product runs over whole rows of k."""
     k = JT.shape[-1]
-    Wb = (JT[:, None] * MT[None]).sum(axis=(3, 4))        # (r, c, body, k)
+    Wb = _einsum("rbjk,cbjk->rcbk", JT.reshape(3, 2, 6, k), MT.reshape(3, 2, 6, k))   # (r, c, body, k)
     k_a, k_b = Wb[0, 0, 0], Wb[0, 0, 1]
     if split is None:
         W = Wb[:, :, 0] + Wb[:, :, 1]
@@ -232,7 +232,7 @@ def _terms_last(JT, MT, VT, split):
     JsT[1] = wtt_inv[0, 0] * J1 + wtt_inv[0, 1] * J2
     JsT[2] = wtt_inv[1, 0] * J1 + wtt_inv[1, 1] * J2
     w_tn = W[1:, 0]
-    g_tn = (wtt_inv * w_tn).sum(axis=1)
-    u0 = (J * VT).sum(axis=1)
+    g_tn = _einsum("ijk,jk->ik", wtt_inv, w_tn)
+    u0 = _einsum("rik,ik->rk", J, VT)
     return (k_a, k_b, mass_n, w_tn.T, W[1:, 1:].transpose(2, 0, 1), wtt_inv.transpose(2, 0, 1),
             _rows_first(JsT), g_tn.T, u0.T)
