@@ -15,6 +15,7 @@ speed is the largest approach speed seen (before the solve, > 0 closing).
 import numpy as np
 
 from ..contact_events import BEGIN, END, PERSIST, ContactEvents
+from .manifold import same
 
 
 class EventAccumulator:
@@ -60,7 +61,7 @@ class EventAccumulator:
         if cur is None and prev is None:
             self.parts = []
             return ContactEvents.empty()
-        if cur is not None and prev is not None and np.array_equal(cur["key"], prev["key"]):
+        if cur is not None and prev is not None and same(cur["key"], prev["key"]):
             # the same contacts as last step: all persist, none ended or froze
             self.prev = cur
             self.parts = []

@@ -63,6 +63,12 @@ class Manifold:
         return self.take(np.argsort(self.key, kind="stable"))
 
 
+def same(x: np.ndarray, y: np.ndarray) -> bool:
+    """np.array_equal for two arrays, without its Python-level conversions
+    (it runs several times per substep on small arrays)."""
+    return x.shape == y.shape and bool((x == y).all())
+
+
 def pair_key(a, b, n: int, slot) -> np.ndarray:
     """Feature key of contact `slot` between bodies a and b of an n-body scene."""
     a = np.asarray(a, dtype=np.int64)

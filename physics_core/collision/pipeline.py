@@ -6,7 +6,7 @@ from ..alloc import keep_freed_memory
 from . import contact_rows, restitution, sleep, solver
 from .coloring import batches, color_contacts
 from .events import EventAccumulator
-from .manifold import Manifold, detect
+from .manifold import Manifold, detect, same
 from .pair_cache import PairCache
 from .warm_start import WarmCache
 
@@ -151,8 +151,8 @@ class ContactPipeline:
         if self.summed:
             sc.colour_in_order = True
             return np.arange(k), np.array([0, k]), 0
-        if (sc.colour is not None and np.array_equal(sc.colour_key, m.key)
-                and np.array_equal(sc.colour_awake, moving)):
+        if (sc.colour is not None and same(sc.colour_key, m.key)
+                and same(sc.colour_awake, moving)):
             return sc.colour
         u = np.where(moving[m.a], m.a, -1)
         w = np.where(moving[m.b], m.b, -1)
@@ -230,15 +230,19 @@ class ContactPipeline:
             dV *= np.where(hit, after, 1.0)[:, None]
         if sc.rewound is not None:
             dV[sc.rewound] = 0.0     # moved back to their time of impact: stay there
-        dsep = np.einsum("ki,ki->k", rows.J[:, 0, :], dV.reshape(-1).take(solver.flat6(rows))) * h
+        dsep = solver.einsum("ki,ki->k", rows.J[:, 0, :], dV.reshape(-1).take(solver.flat6(rows))) * h
         sep = dsep - rows.depth
-        target = np.minimum(p.correction_rate * (-sep - p.slop) / h, p.max_correction_speed)
         dX = dV
-        if p.position_iterations and np.count_nonzero(target > 0.0):
-            Xp = np.zeros((len(V), 3))
-            solver.solve_pseudo(Xp, rows, np.maximum(target, 0.0), p.position_iterations, self.summed)
-            dX = dV.copy()
-            dX[:, :3] += Xp
+        # a push is asked for only where the overlap exceeds slop (−sep − slop > 0)
+        if (p.position_iterations and p.correction_rate > 0.0 and p.max_correction_speed > 0.0
+                and (sep < -p.slop).any()):
+            target = np.minimum(p.correction_rate * (-sep - p.slop) / h, p.max_correction_speed)
+            if np.count_nonzero(target > 0.0):
+                Xp = np.zeros((len(V), 3))
+                solver.solve_pseudo(Xp, rows, np.maximum(target, 0.0), p.position_iterations,
+                                    self.summed)
+                dX = dV.copy()
+                dX[:, :3] += Xp
         s.pos += dX[:, :3] * h
         if dX[:, 3:].any():
             turn = np.flatnonzero(dX[:, 3:].any(axis=1))

@@ -30,6 +30,7 @@ try:        # the C entry point of np.einsum, without the Python dispatch layer
     from numpy._core.multiarray import c_einsum as _einsum
 except ImportError:     # pragma: no cover - other numpy layouts
     _einsum = np.einsum
+einsum = _einsum
 
 
 def _slices(rows):

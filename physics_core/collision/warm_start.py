@@ -9,6 +9,8 @@ extra push is not kept: it belongs to one impact, not to the resting load.
 """
 import numpy as np
 
+from .manifold import same
+
 
 class WarmCache:
     """Kept in the order of the rows they came from: from one substep to the
@@ -38,7 +40,7 @@ class WarmCache:
     def load(self, rows, fraction):
         """Set rows.lam from the cache (× fraction) for keys seen last substep.
         Returns each row's slip speed at the end of last substep (NaN: new contact)."""
-        if len(rows) and np.array_equal(self.key, rows.key):
+        if len(rows) and same(self.key, rows.key):
             slip = self.slip.copy()
             if fraction > 0.0:
                 self._apply(rows, slice(None), slice(None), fraction)
