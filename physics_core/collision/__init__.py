@@ -6,9 +6,11 @@
     ccd          – (ccd: true) fast bodies: time of impact by bisection along
                    the substep; a body that hits is moved back to its time of
                    impact pose, so a thin wall is never crossed
-    collide      – broad and narrow phase at the end-of-substep poses, wake
-                   sleeping bodies that are touched, contact rows, colouring,
-                   warm start from last substep (keyed by feature)
+    collide      – broad and narrow phase at the end-of-substep poses (the
+                   broad phase's pair list is kept between substeps while no
+                   body moves far, pair_cache.py), wake sleeping bodies that
+                   are touched, contact rows, colouring, warm start from last
+                   substep (keyed by feature)
     solve        – warm start, then projected Gauss–Seidel on normal and
                    friction impulses with accumulated clamping, one graph
                    colour (a vectorised batch) at a time

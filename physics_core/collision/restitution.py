@@ -24,7 +24,11 @@ import numpy as np
 
 def pair_restitution(model, a, b, k_a, k_b, rule):
     """(k,) combined C_R; k_a, k_b: each side's part of the normal's inverse effective mass."""
-    ea, eb = model.restitution[a], model.restitution[b]
+    eb = model.restitution[b]
+    static_a = k_a <= 0.0
+    if static_a.all():
+        return eb           # every pair against the floor (or a sleeping body): see below
+    ea = model.restitution[a]
     if rule == "mean":
         out = 0.5 * (ea + eb)
     elif rule == "min":
@@ -35,7 +39,7 @@ def pair_restitution(model, a, b, k_a, k_b, rule):
         total = k_a + k_b
         out = (k_a * ea + k_b * eb) / np.where(total > 0.0, total, 1.0)
     # a static (or sleeping) side is the rigid object the other's C_R refers to
-    out = np.where(k_a <= 0.0, eb, np.where(k_b <= 0.0, ea, out))
+    out = np.where(static_a, eb, np.where(k_b <= 0.0, ea, out))
     return out
 
 
