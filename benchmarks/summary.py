@@ -56,7 +56,8 @@ def build(out, prefix="", level=2):
     if short:
         parts.append(short)
     for title, fn in (("Accuracy of the integrators", _accuracy), ("Contacts", _contacts),
-                      ("Stability", _stability), ("Scale", _scale), ("Cost of each effect", _effects)):
+                      ("Stability", _stability), ("Scale", _scale), ("Cost of each effect", _effects),
+                      ("The ROS 2 node in real time", _node)):
         parts.append(f"{h} {title}\n")
         parts.append(fn(out, prefix, level + 1))
     others = _other_tables(out)
@@ -67,7 +68,7 @@ def build(out, prefix="", level=2):
 
 
 OWN_TABLES = {"accuracy.md", "contacts.md", "stability.md", "scale.md", "effects.md",
-              "README_results.md"}
+              "node_realtime.md", "README_results.md"}
 
 
 def _other_tables(out):
@@ -433,3 +434,40 @@ def _effects(out, prefix, level):
         return f"_Skipped: {data['skipped']}._\n"
     from .effects_cost import tables
     return (f"Details in [effects.md]({prefix}effects.md).\n\n" + tables(data["rows"], level))
+
+
+# ---- the node in real time --------------------------------------------------------
+
+def _node(out, prefix, level):
+    data = read_json(out, "node_realtime.json")
+    if not data or not data.get("rows"):
+        return "_Not run yet: `physics-bench node`._\n"
+    rows = data["rows"]
+    by_case = {}
+    for r in rows:
+        by_case.setdefault(r["case"], {})[bool(r["record"])] = r
+    header = ["case", "real-time factor (no record / record)", "step CPU, ms (of dt)", "engine CPU, ms",
+              "messages per step", "recording: node thread / whole process (of dt)"]
+    table_rows = []
+    for case, pair in by_case.items():
+        plain, rec = pair.get(False), pair.get(True)
+        any_row = plain or rec
+        dt = any_row["dt_ms"]
+        rtf = " / ".join("—" if r is None else f"{r['rtf']:.2f}" for r in (plain, rec))
+        step = f"{plain['step_cpu_ms']:.3f} ({plain['step_cpu_ms'] / dt:.0%})" if plain else "—"
+        engine = f"{plain['engine_cpu_ms']:.3f}" if plain else "—"
+        recording = "—"
+        if rec and rec.get("record_cpu_ms") is not None:
+            whole = rec.get("record_overhead_process_ms")
+            recording = (f"{rec['record_cpu_ms'] / dt:.1%} / "
+                         + ("—" if whole is None else f"{max(whole, 0.0) / dt:.1%}"))
+        table_rows.append([case, rtf, step, engine, str(any_row.get("messages_per_step", "—")), recording])
+    held = [c for c, pair in by_case.items() if all(r["rtf"] >= 0.98 for r in pair.values())]
+    missed = [c for c in by_case if c not in held]
+    lines = [f"Details and method in [node_realtime.md]({prefix}node_realtime.md): the node spun as "
+             "`physics-node` runs it, a subscriber process on `~/poses` and one body's odometry, "
+             f"{data['seconds']:g} s of wall time per row, {data['machine']}.\n",
+             md.table(header, table_rows, align="lrrrrr"),
+             f"Holds real time (factor ≥ 0.98 with and without recording): {'; '.join(held) or 'none'}."
+             + (f" Falls behind: {'; '.join(missed)}." if missed else "") + "\n"]
+    return "\n".join(lines)
