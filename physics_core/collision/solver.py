@@ -95,11 +95,11 @@ def solve_velocities(V, rows, iterations, summed, tolerance=0.0):
         views.append((sum_s or summed, idx6[s], rows.Js[s], rows.M[s], rows.mass_bias[s],
                       rows.g_tn[s], rows.mu[s], rows.sliding[s], rows.lam[s], rows.wtt[s], rows.w_tn[s],
                       bool(np.count_nonzero(rows.sliding[s]))))
-    lam = rows.lam
     # an impulse change dλ moves a row's relative velocity by about dλ / m_eff
     limit = tolerance * float(rows.mass_n.min()) if tolerance > 0.0 and len(rows) else -1.0
+    check = limit > 0.0
     for sweep in range(iterations):
-        before = lam.copy() if limit > 0.0 else None
+        change = 0.0     # largest impulse change of this sweep (each row is updated once)
         for sum_s, idx, Js, M, mass_bias, g_tn, mu, sliding, lam_s, wtt, w_tn, any_sliding in views:
             VAB = Vf.take(idx)
             us = _einsum("kri,ki->kr", Js, VAB)      # (m_n u_n, W_tt⁻¹ u_t)
@@ -112,9 +112,14 @@ def solve_velocities(V, rows, iterations, summed, tolerance=0.0):
             lam_s[:, 1:] = friction.cap(
                 lt, ln, mu, sliding,
                 lambda: (_einsum("kij,kj->ki", wtt, us[:, 1:]) + w_tn * dn[:, None]) if any_sliding else None)
-            d = _einsum("kr,kri->ki", lam_s - old, M)
+            dl = lam_s - old
+            d = _einsum("kr,kri->ki", dl, M)
             _scatter(Vf, idx, VAB + d, d, sum_s)
-        if before is not None and float(np.abs(lam - before).max()) < limit:
+            if check:
+                m = float(np.abs(dl).max())
+                if not m < change:      # NaN propagates: no early stop
+                    change = m
+        if check and change < limit:
             return sweep + 1
     return iterations
 
