@@ -16,6 +16,7 @@ import numpy as np
 
 from ..contact_events import BEGIN, END, PERSIST, ContactEvents
 from .manifold import same
+from .solver import einsum as _einsum
 
 
 class EventAccumulator:
@@ -117,7 +118,7 @@ class EventAccumulator:
 def _columns(cur, event):
     """ContactEvents columns of this step's touching contacts."""
     return dict(point=cur["point"], normal=cur["normal"], impulse=cur["impulse"],
-                friction_impulse=np.sqrt(np.einsum("ij,ij->i", cur["friction"], cur["friction"])),
+                friction_impulse=np.sqrt(_einsum("ij,ij->i", cur["friction"], cur["friction"])),
                 normal_speed=cur["speed"], depth=cur["depth"], body_a=cur["a"],
                 body_b=cur["b"], event=event)
 

@@ -53,7 +53,7 @@ def plane_sphere(model, f, s, pf, qf, ps, qs, margin=0.0):
     r = model.radius[s]
     h = np.einsum("ij,ij->i", n, ps) - model.plane_offset[f]
     point = ps - n * (0.5 * (r + h))[:, None]     # midway between c - r n and c - h n
-    return _one_row(point, n.copy(), r - h)
+    return _one_row(point, n, r - h)          # n: a fresh gather, nothing writes to it
 
 
 def box_sphere(model, f, s, pf, qf, ps, qs, margin=0.0):
