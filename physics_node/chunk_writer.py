@@ -22,6 +22,7 @@ and an inline `ChunkWriter` write the same bytes.
 import queue
 import struct
 import threading
+import time
 import zlib
 
 import numpy as np
@@ -228,6 +229,7 @@ class ChunkWriter:
         self._file_object = f
         self._file = McapFile(f, level)
         self.error = None  # the first exception raised while writing
+        self.cpu_seconds = 0.0  # CPU time spent writing (thread CPU time when threaded)
         self._closed = False
         self._queue = self._thread = None
         if threaded:
@@ -246,10 +248,13 @@ class ChunkWriter:
     def _call(self, method, args):
         if self.error is not None:
             return  # the file is broken; what follows cannot be placed in it
+        start = time.thread_time()
         try:
             getattr(self._file, method)(*args)
         except BaseException as exc:  # reported to the caller by the recorder
             self.error = exc
+        finally:
+            self.cpu_seconds += time.thread_time() - start
 
     def _run(self):
         q = self._queue

@@ -182,12 +182,19 @@ class Recorder:
         finally:
             self._sink = self._chunk = None
             self._stop_sink()  # sink.close(): drain, join the thread, close the file
+            self._writer_cpu = sink.cpu_seconds
         if sink.error is not None and sink.error is not self._reported:
             self._raise(sink)
 
     @property
     def is_open(self):
         return self._sink is not None
+
+    @property
+    def writer_cpu_seconds(self):
+        """CPU time the writer thread has spent compressing and writing chunks."""
+        sink = self._sink
+        return sink.cpu_seconds if sink is not None else getattr(self, "_writer_cpu", 0.0)
 
     def __enter__(self):
         return self.open()

@@ -156,4 +156,5 @@ def test_pacer_unlimited_at_rtf_zero():
     p = StepPacer(dt=0.01, real_time_factor=0.0)
     assert p.due(123.0) is None and p.tick_period() == 0.0
     assert StepPacer(0.01, 1.0).tick_period() == pytest.approx(0.01)
-    assert StepPacer(0.001, 100.0).tick_period() == pytest.approx(0.001)
+    assert StepPacer(0.001, 100.0).tick_period() == pytest.approx(0.002)
+    assert StepPacer(0.005, 1.0).tick_period() == pytest.approx(0.005)
