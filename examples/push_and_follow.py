@@ -17,6 +17,7 @@ import sys
 import time
 
 import rclpy
+from rclpy.executors import ExternalShutdownException
 from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
@@ -98,7 +99,7 @@ def main(argv=None):
             node.push([0.0, 0.0, 0.0])  # let go
             time.sleep(0.2)
         return 0
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, ExternalShutdownException):  # Ctrl-C, or SIGTERM through rclpy's handler
         return 0
     finally:
         node.destroy_node()
