@@ -4,7 +4,10 @@
   frame changes of L = I_w ω (I_w = I 1 for them); bodies that do not spin
   keep their orientation untouched;
 - broad phase: the pair list kept between steps (a Verlet list) gives the
-  same pairs, in the same order, as detecting from scratch every step.
+  same pairs, in the same order, as detecting from scratch every step;
+- contact rows: what depends only on the contact set (pair gathers, friction
+  coefficients, flat indices, the tangent frame of unchanged normals) is
+  reused from the last substep with the same result as building it afresh.
 """
 import numpy as np
 import pytest
@@ -126,3 +129,43 @@ def test_a_pile_steps_bit_for_bit_with_and_without_the_kept_pair_list(sleep):
         for name in ("pos", "quat", "vel", "omega", "awake"):
             assert np.array_equal(getattr(kept.state, name), getattr(fresh.state, name)), name
     assert kept.state.scratch["contacts"].pairs.builds < 200     # the list was kept in between
+
+
+class _NoReuse:
+    """A row cache that never matches: every substep builds its rows afresh."""
+
+    def __new__(cls):
+        from physics_core.collision.contact_rows import RowCache
+
+        class Never(RowCache):
+            def pairs_match(self, key, masses):
+                return False
+        return Never()
+
+
+def _resting_spheres(sleep):
+    rng = np.random.default_rng(3)
+    bodies = [{"name": "ground", "shape": {"type": "plane", "normal": [0, 0, 1], "offset": 0.0}}]
+    for i in range(16):
+        bodies.append(sphere(f"s{i}", radius=0.1, position=((i % 4) * 0.25, (i // 4) * 0.25,
+                                                           0.1 + 0.02 * rng.random())))
+    return scene(*bodies, dt=0.001, gravity="earth", effects={"contacts": {"sleep": sleep}},
+                 friction=[{"a": "default", "b": "default", "static": 0.6, "kinetic": 0.5}])
+
+
+@pytest.mark.parametrize("make", [_pile, _resting_spheres])
+@pytest.mark.parametrize("sleep", [False, True])
+def test_contact_rows_reused_from_the_last_substep_step_bit_for_bit(make, sleep):
+    kept = load_scene(make(sleep))
+    fresh = load_scene(make(sleep))
+    fresh.step(1)
+    kept.step(1)
+    fresh.state.scratch["contacts"].row_cache = _NoReuse()
+    for _ in range(6):
+        kept.step(50)
+        fresh.step(50)
+        for name in ("pos", "quat", "vel", "omega", "awake"):
+            assert np.array_equal(getattr(kept.state, name), getattr(fresh.state, name)), name
+        for name in ("point", "normal", "impulse", "friction_impulse", "normal_speed", "event"):
+            assert np.array_equal(getattr(kept.contacts, name), getattr(fresh.contacts, name)), name
+    assert kept.state.scratch["contacts"].row_cache.key is not None

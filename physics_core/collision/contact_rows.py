@@ -102,7 +102,29 @@ def _rows_first(a):
     return np.ascontiguousarray(a.transpose(2, 0, 1))
 
 
-def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=None, rewound=None):
+class RowCache:
+    """What build() computes from the contact set alone, kept for the next substep.
+
+    From one substep to the next a resting scene has the same contacts (the
+    same keys, hence the same body pairs), the same awake set (World replaces
+    its inverse-mass arrays when that changes) and often the same normals
+    (spheres on a plane): the body pairs' gathers, friction coefficients,
+    flat indices and, with unchanged normals, the tangent frame are then
+    those of the last substep. Reused arrays are never written to."""
+
+    def __init__(self):
+        self.key = None
+        self.masses = None      # (inv_mass, inv_inertia) arrays of the World the gathers came from
+        self.normal = None
+
+    def pairs_match(self, key, masses):
+        return (self.key is not None and self.masses is not None
+                and self.masses[0] is masses[0] and self.masses[1] is masses[1]
+                and self.key.shape == key.shape and bool((self.key == key).all()))
+
+
+def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=None, rewound=None,
+          cache=None, masses=None):
     """Rows for manifold `m` (already in batch order) at positions `pos`.
 
     inv_mass (n,): the solver's inverse masses (zero for static and sleeping
@@ -119,11 +141,23 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
     the solver contact-major, (k, 3, 12)."""
     a, b, n = m.a, m.b, m.normal
     k = len(a)
-    ab = np.empty((k, 2), np.int64)
-    ab[:, 0] = a
-    ab[:, 1] = b
-    DT = friction.tangent_frame_last(n)                    # (3 rows, 3, k)
-    tangent = _rows_first(DT[1:])                          # (k, 2, 3) t1, t2
+    hit = cache is not None and masses is not None and cache.pairs_match(m.key, masses)
+    if hit:
+        ab, ima, iia, mu_s, mu_k, e_static = (cache.ab, cache.ima, cache.iia, cache.mu_s,
+                                              cache.mu_k, cache.e_static)
+    else:
+        ab = np.empty((k, 2), np.int64)
+        ab[:, 0] = a
+        ab[:, 1] = b
+        ima = inv_mass[ab].T[None, :, None]
+        iia = iso_inv[ab].T[None, :, None] if inv_inertia_w is None else None
+        mu_s, mu_k = friction.coefficients(model, a, b)
+        e_static = None
+    if cache is not None and cache.normal is not None and hit and same_array(cache.normal, n):
+        DT, tangent = cache.DT, cache.tangent
+    else:
+        DT = friction.tangent_frame_last(n)                    # (3 rows, 3, k)
+        tangent = _rows_first(DT[1:])                          # (k, 2, 3) t1, t2
     # lever arms, signed by side: −r_A, +r_B (2, 3, k)
     r = np.empty((2, 3, k))
     np.multiply((m.point[:, None, :] - pos[ab]).transpose(1, 2, 0), _SIDE, out=r)
@@ -139,9 +173,9 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
     # M = M⁻¹ Jᵀ as rows: inverse masses scale the linear columns; the angular
     # ones take I_w⁻¹, a scalar for isotropic bodies, a 3×3 product otherwise
     MT = np.empty_like(JT)
-    np.multiply(JT[:, :, 0], inv_mass[ab].T[None, :, None], out=MT[:, :, 0])
+    np.multiply(JT[:, :, 0], ima, out=MT[:, :, 0])
     if inv_inertia_w is None:
-        np.multiply(ang, iso_inv[ab].T[None, :, None], out=MT[:, :, 1])
+        np.multiply(ang, iia, out=MT[:, :, 1])
         VT = np.ascontiguousarray(V[ab].reshape(k, 12).T)
         k_a, k_b, mass_n, w_tn, wtt, wtt_inv, Js, g_tn, u0 = _terms_last(JT, MT, VT, split)
         J = _rows_first(JT.reshape(3, 12, k))
@@ -152,8 +186,20 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
         M[:, :, 3:6] = J[:, :, 3:6] @ inv_inertia_w[a]     # I_w⁻¹ is symmetric
         M[:, :, 9:12] = J[:, :, 9:12] @ inv_inertia_w[b]
         k_a, k_b, mass_n, w_tn, wtt, wtt_inv, Js, g_tn, u0 = _terms(J, M, V[ab].reshape(k, 12), split)
-    mu_s, mu_k = friction.coefficients(model, a, b)
-    e = restitution.pair_restitution(model, a, b, k_a, k_b, params.restitution_combine)
+    if e_static is not None:
+        e = e_static
+    else:
+        e = restitution.pair_restitution(model, a, b, k_a, k_b, params.restitution_combine)
+    if cache is not None and masses is not None:
+        if not hit:
+            cache.key, cache.masses = m.key, masses
+            cache.ab, cache.ima, cache.iia, cache.mu_s, cache.mu_k = ab, ima, iia, mu_s, mu_k
+            # every a static or asleep (zero inverse mass and inertia): e depends on b only
+            cache.e_static = None
+            if not ima[:, 0].any() and (iia is None or not iia[:, 0].any()) and inv_inertia_w is None:
+                cache.e_static = e
+            cache.flat6 = (ab[:, :, None] * 6 + np.arange(6)).reshape(k, 12)   # solver.flat_index(ab, 6)
+        cache.normal, cache.DT, cache.tangent = n, DT, tangent
     # Separation at the start of the step, linearised: the detected (end) pose
     # came from moving with u0, so s0 = s_end − h u0_n. A body moved back to its
     # time of impact already sits at the start of its remaining motion.
@@ -171,7 +217,12 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
                        wtt=wtt, wtt_inv=wtt_inv, Js=Js, mass_bias=mass_n * bias,
                        g_tn=g_tn, mu_s=mu_s, mu_k=mu_k, mu=mu_k, sliding=np.ones(k, bool), e=e,
                        u0=u0, bias=bias, lam=np.zeros((k, 3)), bounds=np.array([0, k]),
-                       split=np.ones((k, 2)) if split is None else split, summed_from=k)
+                       split=np.ones((k, 2)) if split is None else split, summed_from=k,
+                       flat6=cache.flat6 if cache is not None and masses is not None else None)
+
+
+def same_array(x, y):
+    return x.shape == y.shape and bool((x == y).all())
 
 
 

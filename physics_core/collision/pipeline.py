@@ -35,6 +35,7 @@ class ContactScratch:
         self.colour_of = None     # (k,) colour of each contact of colour_key
         self.colour_in_order = False   # the colouring's order is the identity
         self.fresh_colours = 0    # colours of the last colouring from scratch
+        self.row_cache = contact_rows.RowCache()   # last substep's per-contact-set arrays
 
 
 def merge_tail(bounds, fraction):
@@ -133,7 +134,8 @@ class ContactPipeline:
             iw, iso = None, world.inv_inertia[:, 0]
         else:
             iw, iso = contact_rows.world_inverse_inertia(s.quat, world.inv_inertia), None
-        rows = contact_rows.build(model, m, s.pos, inv_mass, iw, iso, V, h, p, split, sc.rewound)
+        rows = contact_rows.build(model, m, s.pos, inv_mass, iw, iso, V, h, p, split, sc.rewound,
+                                  sc.row_cache, (world.inv_mass, world.inv_inertia))
         rows.bounds = bounds
         rows.summed_from = summed_from
         rows.key_sorted = sc.colour_in_order      # detect's rows come in key order
