@@ -169,3 +169,27 @@ def test_contact_rows_reused_from_the_last_substep_step_bit_for_bit(make, sleep)
         for name in ("point", "normal", "impulse", "friction_impulse", "normal_speed", "event"):
             assert np.array_equal(getattr(kept.contacts, name), getattr(fresh.contacts, name)), name
     assert kept.state.scratch["contacts"].row_cache.key is not None
+
+
+def test_spheres_on_a_plane_give_the_kernels_contacts_from_the_kept_pair_list():
+    from physics_core.collision.narrowphase import collide
+    from physics_core.collision.pair_cache import PairCache
+
+    w = load_scene(_resting_spheres(False))
+    cache = PairCache(w.model)
+    margin = 0.001
+    for _ in range(40):
+        w.step(5)
+        kept = collide(w.model, w.state.pos, w.state.quat, margin, cache)
+        fresh = collide(w.model, w.state.pos, w.state.quat, margin)
+        for name in ("a", "b", "point", "normal", "depth", "key"):
+            assert np.array_equal(getattr(kept, name), getattr(fresh, name)), name
+    assert cache.memo is not None and cache.memo.plane_sphere
+    # a sphere lifted out of reach: the kept list still holds its pair, the
+    # kernels' filter drops it
+    w.state.pos[1, 2] += 0.05
+    kept = collide(w.model, w.state.pos, w.state.quat, margin, cache)
+    fresh = collide(w.model, w.state.pos, w.state.quat, margin)
+    assert len(kept) == len(fresh) == 15
+    for name in ("a", "b", "point", "normal", "depth", "key"):
+        assert np.array_equal(getattr(kept, name), getattr(fresh, name)), name

@@ -226,6 +226,14 @@ def collide(model, pos, quat, margin: float = 0.0, pairs=None) -> Manifold:
         a, b = pairs.pairs(model, pos, quat, margin)
     if len(a) == 0:
         return Manifold.empty()
+    if pairs is not None:
+        memo = pairs.memo
+        if memo is None or memo.a is not a or memo.b is not b:
+            memo = pairs.memo = PairMemo(model, a, b)
+        if memo.plane_sphere:
+            m = _plane_sphere_rows(memo, pos, margin)
+            if m is not None:
+                return m
     rows = _kernel_rows(model, a, b, margin, pos=pos, quat=quat)
     near = rows[4] > -margin
     if not near.all():
@@ -234,6 +242,39 @@ def collide(model, pos, quat, margin: float = 0.0, pairs=None) -> Manifold:
     m = _manifold(model, a, b, rows)
     # pairs come sorted; rows need a sort only when several kinds or slots interleave
     return m if np.all(m.key[1:] > m.key[:-1]) else m.sorted_by_key()
+
+
+class PairMemo:
+    """What the narrow phase derives from a kept pair list alone (pair_cache.py
+    hands back the very same arrays while its list holds): whether every pair
+    is a plane under a sphere, and then the pairs' plane normals, offsets,
+    radii, keys and order. Nothing here is written to after it is made."""
+
+    def __init__(self, model, a, b):
+        self.a, self.b = a, b
+        ta, tb = model.shape_type.take(a), model.shape_type.take(b)
+        self.plane_sphere = bool(len(a) and (ta == PLANE).all() and (tb == SPHERE).all())
+        if self.plane_sphere:
+            self.n = model.plane_normal[a]
+            self.offset = model.plane_offset[a]
+            self.radius = model.radius[b]
+            self.key = pair_key(a, b, model.n, 0)
+            self.key_sorted = bool(np.all(self.key[1:] > self.key[:-1]))
+
+
+def _plane_sphere_rows(memo, pos, margin):
+    """collide's result when every kept pair is plane–sphere and every one is
+    within the margin (else None): plane_sphere's arithmetic, the gathers and
+    keys from the memo."""
+    ps = pos.take(memo.b, axis=0)
+    r = memo.radius
+    h = np.einsum("ij,ij->i", memo.n, ps) - memo.offset
+    depth = r - h
+    if not (depth > -margin).all() or not memo.key_sorted:
+        return None
+    n = memo.n.copy()
+    point = ps - n * (0.5 * (r + h))[:, None]
+    return Manifold(a=memo.a, b=memo.b, point=point, normal=n, depth=depth, key=memo.key)
 
 
 def signed_depth(model, a, b, pa, qa, pb, qb) -> np.ndarray:

@@ -44,6 +44,7 @@ class PairCache:
         self.turn_reach = self.rows.radius[self.turners]
         self.margin = None
         self.builds = 0
+        self.memo = None     # narrowphase.PairMemo of the list last handed out
 
     def pairs(self, model, pos, quat, margin):
         """(a, b): candidate_pairs(model, pos, quat, margin), from the kept list."""
