@@ -27,8 +27,10 @@ class EventAccumulator:
     def reset(self):
         self.parts = []
 
-    def add(self, rows):
-        """Record the touching contacts of one substep (after its solve)."""
+    def add(self, rows, friction=None):
+        """Record the touching contacts of one substep (after its solve).
+        `friction`: the rows' tangential impulses as world vectors
+        (λ_t1 t1 + λ_t2 t2), when already computed (warm_start.WarmCache.store)."""
         if not len(rows):
             return
         lam = rows.lam
@@ -38,8 +40,10 @@ class EventAccumulator:
             # every contact touches and they are in key order already (a resting
             # scene, one colour): the rows' own arrays, no gathers (rows are built
             # afresh each substep, so nothing writes to them afterwards)
-            tan = rows.tangent
-            ft = lam[:, 1:2] * tan[:, 0] + lam[:, 2:3] * tan[:, 1]
+            if friction is None:
+                tan = rows.tangent
+                friction = lam[:, 1:2] * tan[:, 0] + lam[:, 2:3] * tan[:, 1]
+            ft = friction
             self.parts.append(dict(key=key, a=rows.a, b=rows.b, point=rows.point, normal=rows.normal,
                                    depth=rows.depth, impulse=lam[:, 0], friction=ft,
                                    speed=-rows.u0[:, 0]))
@@ -48,7 +52,10 @@ class EventAccumulator:
             return
         t = np.flatnonzero(touching)
         t = t[np.argsort(key[t], kind="stable")]
-        ft = lam[t, 1:2] * rows.tangent[t, 0] + lam[t, 2:3] * rows.tangent[t, 1]
+        if friction is not None:
+            ft = friction[t]
+        else:
+            ft = lam[t, 1:2] * rows.tangent[t, 0] + lam[t, 2:3] * rows.tangent[t, 1]
         self.parts.append(dict(
             key=key[t], a=rows.a[t], b=rows.b[t], point=rows.point[t], normal=rows.normal[t],
             depth=rows.depth[t], impulse=lam[t, 0], friction=ft,

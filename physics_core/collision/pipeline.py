@@ -255,7 +255,9 @@ class ContactPipeline:
     def events(self, world, h):
         sc = self.scratch(world)
         if sc.rows is not None:
-            sc.events.add(sc.rows)
+            # the solve's tangential impulses, as the warm-start cache keeps them
+            # (restitution and the position pass change only normal impulses)
+            sc.events.add(sc.rows, sc.warm.friction if sc.warm.key is sc.rows.key else None)
         if self._last_substep(world):
             world.contacts = sc.events.finish(~self.model.is_static & world.state.awake)
 
