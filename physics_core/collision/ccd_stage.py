@@ -14,6 +14,11 @@ is lost for that body: a small, bounded time error instead of a tunnel.
 """
 import numpy as np
 
+try:        # the C entry point of np.einsum, without the Python dispatch layer
+    from numpy._core.multiarray import c_einsum as _einsum
+except ImportError:     # pragma: no cover - other numpy layouts
+    _einsum = np.einsum
+
 from . import toi
 from .broadphase import bounding_radius
 
@@ -39,8 +44,8 @@ def ccd(world, h, params, scratch, consts=None):
     # body has not moved (reach 0) and static ones have an infinite threshold
     # only if they are planes, so they are masked out below
     d = s.pos - p0
-    d2 = np.einsum("ij,ij->i", d, d)
-    w2 = np.einsum("ij,ij->i", s.omega, s.omega)
+    d2 = _einsum("ij,ij->i", d, d)
+    w2 = _einsum("ij,ij->i", s.omega, s.omega)
     # cheaper still, for a scene at rest: every |Δc| and every R θ under half
     # the smallest threshold means no body can be over its own
     if (d2.max(initial=0.0) <= consts.quarter_min2

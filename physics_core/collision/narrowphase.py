@@ -17,6 +17,11 @@ from .. import quaternion as qt
 from ..shapes import BOX, PLANE, SPHERE
 from .broadphase import candidate_pairs
 from .manifold import Manifold, pair_key
+
+try:        # the C entry point of np.einsum, without the Python dispatch layer
+    from numpy._core.multiarray import c_einsum as _einsum
+except ImportError:     # pragma: no cover - other numpy layouts
+    _einsum = np.einsum
 from .narrow_box import box_box, box_box_separation
 
 # Sign pattern of the 8 box vertices: vertex v has x sign from bit 0, y from bit 1, z from bit 2.
@@ -38,7 +43,7 @@ def sphere_sphere(model, f, s, pf, qf, ps, qs, margin=0.0):
     (COINCIDENT_NORMAL), a fixed choice so the result is never NaN."""
     ra, rb = model.radius[f], model.radius[s]
     d = ps - pf
-    dist = np.sqrt(np.einsum("ij,ij->i", d, d))
+    dist = np.sqrt(_einsum("ij,ij->i", d, d))
     ok = dist > _TINY
     normal = np.where(ok[:, None], d / np.where(ok, dist, 1.0)[:, None], COINCIDENT_NORMAL)
     depth = ra + rb - dist
@@ -51,7 +56,7 @@ def plane_sphere(model, f, s, pf, qf, ps, qs, margin=0.0):
     normal n (from the plane to the sphere)."""
     n = model.plane_normal[f]
     r = model.radius[s]
-    h = np.einsum("ij,ij->i", n, ps) - model.plane_offset[f]
+    h = _einsum("ij,ij->i", n, ps) - model.plane_offset[f]
     point = ps - n * (0.5 * (r + h))[:, None]     # midway between c - r n and c - h n
     return _one_row(point, n, r - h)          # n: a fresh gather, nothing writes to it
 
@@ -268,7 +273,7 @@ def _plane_sphere_rows(memo, pos, margin):
     keys from the memo."""
     ps = pos.take(memo.b, axis=0)
     r = memo.radius
-    h = np.einsum("ij,ij->i", memo.n, ps) - memo.offset
+    h = _einsum("ij,ij->i", memo.n, ps) - memo.offset
     depth = r - h
     if not (depth > -margin).all() or not memo.key_sorted:
         return None

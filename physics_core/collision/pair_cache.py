@@ -26,6 +26,11 @@ same arrays, to the last bit, as candidate_pairs at the current poses.
 """
 import numpy as np
 
+try:        # the C entry point of np.einsum, without the Python dispatch layer
+    from numpy._core.multiarray import c_einsum as _einsum
+except ImportError:     # pragma: no cover - other numpy layouts
+    _einsum = np.einsum
+
 from ..shapes import BOX
 from .broadphase import ModelRows, plane_clearance, solid_columns, solid_pairs, sorted_pairs
 
@@ -67,14 +72,14 @@ class PairCache:
         limit = REBUILD_AT * self.skin
         if not len(self.turners):
             # no turn term: compare squared lengths (NaN compares False: rebuild)
-            return bool(np.einsum("ij,ij->i", d, d).max(initial=0.0) <= limit * limit)
-        move = np.sqrt(np.einsum("ij,ij->i", d, d))
+            return bool(_einsum("ij,ij->i", d, d).max(initial=0.0) <= limit * limit)
+        move = np.sqrt(_einsum("ij,ij->i", d, d))
         if len(self.turners):
             t = self.turners
             dq = quat[t] - self.quat0[t]
             # |q − q0| = 2 sin(θ/4) for unit quaternions of the same sign; a flipped
             # sign reads as a large turn, which only rebuilds sooner
-            chord = np.sqrt(np.einsum("ij,ij->i", dq, dq))
+            chord = np.sqrt(_einsum("ij,ij->i", dq, dq))
             move[t] += self.turn_reach * 4.0 * np.arcsin(np.minimum(0.5 * chord, 1.0))
         # NaN (a body gone non-finite) compares False: rebuild, as from scratch
         return bool(move.max(initial=0.0) <= limit)

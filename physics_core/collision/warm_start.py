@@ -9,6 +9,11 @@ extra push is not kept: it belongs to one impact, not to the resting load.
 """
 import numpy as np
 
+try:        # the C entry point of np.einsum, without the Python dispatch layer
+    from numpy._core.multiarray import c_einsum as _einsum
+except ImportError:     # pragma: no cover - other numpy layouts
+    _einsum = np.einsum
+
 from .manifold import same
 
 
@@ -67,7 +72,7 @@ class WarmCache:
         tan = rows.tangent[hit]
         lam = rows.lam
         lam[hit, 0] = self.normal[j]
-        lam[hit, 1] = np.einsum("ij,ij->i", f, tan[:, 0])
-        lam[hit, 2] = np.einsum("ij,ij->i", f, tan[:, 1])
+        lam[hit, 1] = _einsum("ij,ij->i", f, tan[:, 0])
+        lam[hit, 2] = _einsum("ij,ij->i", f, tan[:, 1])
         if fraction != 1.0:
             lam[hit] *= fraction
