@@ -116,6 +116,7 @@ class RowCache:
         self.key = None
         self.masses = None      # (inv_mass, inv_inertia) arrays of the World the gathers came from
         self.normal = None
+        self.ones = None
 
     def pairs_match(self, key, masses):
         return (self.key is not None and self.masses is not None
@@ -217,8 +218,17 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
                        wtt=wtt, wtt_inv=wtt_inv, Js=Js, mass_bias=mass_n * bias,
                        g_tn=g_tn, mu_s=mu_s, mu_k=mu_k, mu=mu_k, sliding=np.ones(k, bool), e=e,
                        u0=u0, bias=bias, lam=np.zeros((k, 3)), bounds=np.array([0, k]),
-                       split=np.ones((k, 2)) if split is None else split, summed_from=k,
+                       split=_ones_split(k, cache) if split is None else split, summed_from=k,
                        flat6=cache.flat6 if cache is not None and masses is not None else None)
+
+
+def _ones_split(k, cache):
+    """(k, 2) ones (no mass splitting); read only, so kept while the count holds."""
+    if cache is None:
+        return np.ones((k, 2))
+    if cache.ones is None or len(cache.ones) != k:
+        cache.ones = np.ones((k, 2))
+    return cache.ones
 
 
 def same_array(x, y):

@@ -61,9 +61,10 @@ class EventAccumulator:
             depth=rows.depth[t], impulse=lam[t, 0], friction=ft,
             speed=-rows.u0[t, 0]))
 
-    def finish(self, moving) -> ContactEvents:
+    def finish(self, moving, awake=None) -> ContactEvents:
         """The step's events; also remembers them for the next step's begin/end.
-        `moving` (n,) marks awake dynamic bodies."""
+        `moving` (n,) marks awake dynamic bodies; or, with `awake`, a function
+        of it giving them (called only when some contact began or ended)."""
         cur = self._merge()
         prev = self.prev
         if cur is None and prev is None:
@@ -74,6 +75,8 @@ class EventAccumulator:
             self.prev = cur
             self.parts = []
             return ContactEvents(**_columns(cur, np.full(len(cur["key"]), PERSIST, dtype=np.uint8)))
+        if awake is not None:
+            moving = moving(awake)
         cols = {}
         if cur is not None:
             known = _member(cur["key"], prev["key"]) if prev is not None else np.zeros(len(cur["key"]), bool)

@@ -192,6 +192,10 @@ class ContactPipeline:
         rows = sc.rows
         if rows is None:
             return
+        sc.bounce = None
+        if rows.u0[:, 0].min() >= -self.p.restitution_threshold:
+            # nothing approaches faster than the threshold: every C_R is 0 (NaN: go on)
+            return
         approach = -rows.u0[:, 0]
         e = restitution.effective(rows.e, approach, self.p.restitution_threshold,
                                   self.p.restitution_ramp)
@@ -259,7 +263,10 @@ class ContactPipeline:
             # (restitution and the position pass change only normal impulses)
             sc.events.add(sc.rows, sc.warm.friction if sc.warm.key is sc.rows.key else None)
         if self._last_substep(world):
-            world.contacts = sc.events.finish(~self.model.is_static & world.state.awake)
+            world.contacts = sc.events.finish(self._moving, world.state.awake)
+
+    def _moving(self, awake):
+        return ~self.model.is_static & awake
 
     def sleep(self, world, h):
         if not self._last_substep(world):
