@@ -121,7 +121,8 @@ class RowCache:
     def pairs_match(self, key, masses):
         return (self.key is not None and self.masses is not None
                 and self.masses[0] is masses[0] and self.masses[1] is masses[1]
-                and self.key.shape == key.shape and bool((self.key == key).all()))
+                and (self.key is key or (self.key.shape == key.shape
+                                         and bool((self.key == key).all()))))
 
 
 def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=None, rewound=None,
@@ -146,10 +147,15 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
     if hit:
         ab, ima, iia, mu_s, mu_k, e_static = (cache.ab, cache.ima, cache.iia, cache.mu_s,
                                               cache.mu_k, cache.e_static)
+        flat6, flat6T = cache.flat6, cache.flat6T
     else:
         ab = np.empty((k, 2), np.int64)
         ab[:, 0] = a
         ab[:, 1] = b
+        flat6 = flat6T = None
+        if cache is not None and masses is not None:
+            flat6 = (ab[:, :, None] * 6 + np.arange(6)).reshape(k, 12)   # solver.flat_index(ab, 6)
+            flat6T = np.ascontiguousarray(flat6.T)
         ima = inv_mass[ab].T[None, :, None]
         iia = iso_inv[ab].T[None, :, None] if inv_inertia_w is None else None
         mu_s, mu_k = friction.coefficients(model, a, b)
@@ -161,7 +167,7 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
         tangent = _rows_first(DT[1:])                          # (k, 2, 3) t1, t2
     # lever arms, signed by side: −r_A, +r_B (2, 3, k)
     r = np.empty((2, 3, k))
-    np.multiply((m.point[:, None, :] - pos[ab]).transpose(1, 2, 0), _SIDE, out=r)
+    np.multiply((m.point[:, None, :] - pos.take(ab, axis=0)).transpose(1, 2, 0), _SIDE, out=r)
     # J as (row, body, linear | angular, xyz, k): (side d, r_side × d)
     JT = np.empty((3, 2, 2, 3, k))
     np.multiply(DT[:, None], _SIDE, out=JT[:, :, 0])
@@ -177,7 +183,10 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
     np.multiply(JT[:, :, 0], ima, out=MT[:, :, 0])
     if inv_inertia_w is None:
         np.multiply(ang, iia, out=MT[:, :, 1])
-        VT = np.ascontiguousarray(V[ab].reshape(k, 12).T)
+        if flat6T is not None:
+            VT = V.reshape(-1).take(flat6T)          # (12, k) (V_a, V_b) by column
+        else:
+            VT = np.ascontiguousarray(V[ab].reshape(k, 12).T)
         k_a, k_b, mass_n, w_tn, wtt, wtt_inv, Js, g_tn, u0 = _terms_last(JT, MT, VT, split)
         J = _rows_first(JT.reshape(3, 12, k))
         M = _rows_first(MT.reshape(3, 12, k))
@@ -199,7 +208,7 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
             cache.e_static = None
             if not ima[:, 0].any() and (iia is None or not iia[:, 0].any()) and inv_inertia_w is None:
                 cache.e_static = e
-            cache.flat6 = (ab[:, :, None] * 6 + np.arange(6)).reshape(k, 12)   # solver.flat_index(ab, 6)
+            cache.flat6, cache.flat6T = flat6, flat6T
         cache.normal, cache.DT, cache.tangent = n, DT, tangent
     # Separation at the start of the step, linearised: the detected (end) pose
     # came from moving with u0, so s0 = s_end − h u0_n. A body moved back to its
@@ -219,7 +228,7 @@ def build(model, m, pos, inv_mass, inv_inertia_w, iso_inv, V, h, params, split=N
                        g_tn=g_tn, mu_s=mu_s, mu_k=mu_k, mu=mu_k, sliding=np.ones(k, bool), e=e,
                        u0=u0, bias=bias, lam=np.zeros((k, 3)), bounds=np.array([0, k]),
                        split=_ones_split(k, cache) if split is None else split, summed_from=k,
-                       flat6=cache.flat6 if cache is not None and masses is not None else None)
+                       flat6=flat6)
 
 
 def _ones_split(k, cache):

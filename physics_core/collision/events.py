@@ -34,12 +34,14 @@ class EventAccumulator:
         if not len(rows):
             return
         lam = rows.lam
-        touching = (rows.depth >= 0.0) | (lam[:, 0] > 0.0)
         key = rows.key
-        if touching.all() and (rows.key_sorted or np.all(key[1:] > key[:-1])):
+        # every row pushing (the usual resting case) already makes all of them touch
+        touching = None if (lam[:, 0] > 0.0).all() else (rows.depth >= 0.0) | (lam[:, 0] > 0.0)
+        if ((touching is None or touching.all())
+                and (rows.key_sorted or np.all(key[1:] > key[:-1]))):
             # every contact touches and they are in key order already (a resting
-            # scene, one colour): the rows' own arrays, no gathers (rows are built
-            # afresh each substep, so nothing writes to them afterwards)
+            # scene, one colour): the rows' own arrays, no gathers (nothing writes
+            # to a row's arrays once they are built)
             if friction is None:
                 tan = rows.tangent
                 friction = lam[:, 1:2] * tan[:, 0] + lam[:, 2:3] * tan[:, 1]
@@ -48,6 +50,8 @@ class EventAccumulator:
                                    depth=rows.depth, impulse=lam[:, 0], friction=ft,
                                    speed=-rows.u0[:, 0]))
             return
+        if touching is None:
+            touching = np.ones(len(key), bool)
         if not touching.any():
             return
         t = np.flatnonzero(touching)

@@ -46,7 +46,7 @@ class WarmCache:
         """Set rows.lam from the cache (× fraction) for keys seen last substep.
         Returns each row's slip speed at the end of last substep (NaN: new contact)."""
         if len(rows) and same(self.key, rows.key):
-            slip = self.slip.copy()
+            slip = self.slip        # only read; store() replaces it
             if fraction > 0.0:
                 self._apply(rows, slice(None), slice(None), fraction)
             return slip
