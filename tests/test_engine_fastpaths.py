@@ -184,7 +184,7 @@ def test_spheres_on_a_plane_give_the_kernels_contacts_from_the_kept_pair_list():
         fresh = collide(w.model, w.state.pos, w.state.quat, margin)
         for name in ("a", "b", "point", "normal", "depth", "key"):
             assert np.array_equal(getattr(kept, name), getattr(fresh, name)), name
-    assert cache.memo is not None and cache.memo.plane_sphere
+    assert cache.plane_sphere and cache.memo is not None
     # a sphere lifted out of reach: the kept list still holds its pair, the
     # kernels' filter drops it
     w.state.pos[1, 2] += 0.05
@@ -193,3 +193,51 @@ def test_spheres_on_a_plane_give_the_kernels_contacts_from_the_kept_pair_list():
     assert len(kept) == len(fresh) == 15
     for name in ("a", "b", "point", "normal", "depth", "key"):
         assert np.array_equal(getattr(kept, name), getattr(fresh, name)), name
+
+
+def _restitution_in_full(pipeline, world, h):
+    """The restitution stage without its early return (the general path)."""
+    from physics_core.collision import restitution, solver
+
+    sc = pipeline.scratch(world)
+    rows = sc.rows
+    if rows is None:
+        return
+    approach = -rows.u0[:, 0]
+    e = restitution.effective(rows.e, approach, pipeline.p.restitution_threshold,
+                              pipeline.p.restitution_ramp)
+    active = (e > 0.0) & (rows.lam[:, 0] > 0.0)
+    sc.bounce = None
+    if np.count_nonzero(active):
+        solver.solve_normal_targets(sc.V, rows, e * approach, active, 1, pipeline.summed)
+        i = np.flatnonzero(active)
+        s0 = approach[i] * h - rows.depth[i]
+        tau = np.clip(s0 / np.maximum(approach[i] * h, 1e-300), 0.0, 1.0)
+        sc.bounce = (np.concatenate([rows.a[i], rows.b[i]]), np.concatenate([tau, tau]))
+
+
+@pytest.mark.parametrize("ramp", [0.0, 0.3])
+def test_restitution_skipped_when_nothing_approaches_fast_steps_like_the_full_stage(ramp):
+    import functools
+
+    def bouncing():
+        bodies = [{"name": "ground", "shape": {"type": "plane", "normal": [0, 0, 1], "offset": 0.0}}]
+        for i in range(6):
+            bodies.append(sphere(f"s{i}", radius=0.1, position=(0.3 * i, 0.0, 0.15 + 0.1 * i)))
+            bodies[-1]["restitution"] = 0.6
+        return scene(*bodies, dt=0.001, gravity="earth",
+                     effects={"contacts": {"sleep": False, "restitution_ramp": ramp}},
+                     friction=[{"a": "default", "b": "default", "static": 0.6, "kinetic": 0.5}])
+
+    fast, full = load_scene(bouncing()), load_scene(bouncing())
+    i = [n for n, _ in full._contact_stages].index("restitution")
+    pipeline = full._contact_stages[i][1].__self__
+    full._contact_stages[i] = ("restitution", functools.partial(_restitution_in_full, pipeline))
+    bounced = 0
+    for _ in range(600):
+        fast.step(1)
+        full.step(1)
+        bounced += fast.state.scratch["contacts"].bounce is not None
+        for name in ("pos", "quat", "vel", "omega"):
+            assert np.array_equal(getattr(fast.state, name), getattr(full.state, name)), name
+    assert 0 < bounced < 600     # some steps bounced, others took the early return

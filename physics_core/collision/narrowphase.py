@@ -231,14 +231,13 @@ def collide(model, pos, quat, margin: float = 0.0, pairs=None) -> Manifold:
         a, b = pairs.pairs(model, pos, quat, margin)
     if len(a) == 0:
         return Manifold.empty()
-    if pairs is not None:
+    if pairs is not None and pairs.plane_sphere:
         memo = pairs.memo
         if memo is None or memo.a is not a or memo.b is not b:
             memo = pairs.memo = PairMemo(model, a, b)
-        if memo.plane_sphere:
-            m = _plane_sphere_rows(memo, pos, margin)
-            if m is not None:
-                return m
+        m = _plane_sphere_rows(memo, pos, margin)
+        if m is not None:
+            return m
     rows = _kernel_rows(model, a, b, margin, pos=pos, quat=quat)
     near = rows[4] > -margin
     if not near.all():
@@ -250,21 +249,18 @@ def collide(model, pos, quat, margin: float = 0.0, pairs=None) -> Manifold:
 
 
 class PairMemo:
-    """What the narrow phase derives from a kept pair list alone (pair_cache.py
-    hands back the very same arrays while its list holds): whether every pair
-    is a plane under a sphere, and then the pairs' plane normals, offsets,
-    radii, keys and order. Nothing here is written to after it is made."""
+    """What the narrow phase derives from a kept pair list of planes under
+    spheres alone (pair_cache.py hands back the very same arrays while its
+    list holds): the pairs' plane normals, offsets, radii, keys and order.
+    Nothing here is written to after it is made."""
 
     def __init__(self, model, a, b):
         self.a, self.b = a, b
-        ta, tb = model.shape_type.take(a), model.shape_type.take(b)
-        self.plane_sphere = bool(len(a) and (ta == PLANE).all() and (tb == SPHERE).all())
-        if self.plane_sphere:
-            self.n = model.plane_normal[a]
-            self.offset = model.plane_offset[a]
-            self.radius = model.radius[b]
-            self.key = pair_key(a, b, model.n, 0)
-            self.key_sorted = bool(np.all(self.key[1:] > self.key[:-1]))
+        self.n = model.plane_normal[a]
+        self.offset = model.plane_offset[a]
+        self.radius = model.radius[b]
+        self.key = pair_key(a, b, model.n, 0)
+        self.key_sorted = bool(np.all(self.key[1:] > self.key[:-1]))
 
 
 def _plane_sphere_rows(memo, pos, margin):

@@ -31,7 +31,7 @@ try:        # the C entry point of np.einsum, without the Python dispatch layer
 except ImportError:     # pragma: no cover - other numpy layouts
     _einsum = np.einsum
 
-from ..shapes import BOX
+from ..shapes import BOX, PLANE, SPHERE
 from .broadphase import ModelRows, plane_clearance, solid_columns, solid_pairs, sorted_pairs
 
 SKIN = 0.25         # the list's extra margin, × the median bounding radius of the dynamic bodies
@@ -50,6 +50,7 @@ class PairCache:
         self.margin = None
         self.builds = 0
         self.memo = None     # narrowphase.PairMemo of the list last handed out
+        self.plane_sphere = False   # every kept pair is a plane under a sphere
 
     def pairs(self, model, pos, quat, margin):
         """(a, b): candidate_pairs(model, pos, quat, margin), from the kept list."""
@@ -105,6 +106,10 @@ class PairCache:
         self.quat0 = np.array(quat, dtype=float)
         self.margin = margin
         self.builds += 1
+        st = model.shape_type
+        self.plane_sphere = bool(len(self.a) and (st[self.a] == PLANE).all()
+                                 and (st[self.b] == SPHERE).all())
+        self.memo = None
 
 
 def overlap_mask(lo, hi, centre, reach, p, q):
