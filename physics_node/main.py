@@ -17,7 +17,7 @@ from rclpy.signals import SignalHandlerOptions
 from physics_core import SceneError
 
 from .node import PhysicsNode
-from .parameters import ParameterValueError
+from .parameters import ODOMETRY_MODES, ParameterValueError
 
 
 def build_parser():
@@ -33,7 +33,7 @@ def build_parser():
     p.add_argument("--paused", action="store_true", default=None, help="start paused")
     p.add_argument(
         "--odometry",
-        choices=("subscribed", "all"),
+        choices=ODOMETRY_MODES,
         help="per-body odometry: only to topics with a subscriber (default) or every body every step",
     )
     p.add_argument(

@@ -64,9 +64,8 @@ class Outputs:
         markers while someone (RViz, Foxglove) listens. Poses, contacts and
         /clock are always sent. A publish costs 5-10 us even with no reader,
         so a thousand unread odometry topics would cost more than the step."""
-        self._odom_read = [p.get_subscription_count() > 0 for p in self.odom]
-        self._markers_on = self.markers.get_subscription_count() > 0
-        self._update_rows()
+        self._poll_at = 0
+        self.poll_subscribers(1)
 
     def poll_subscribers(self, parts):
         """`refresh_subscribers` spread over `parts` calls: each asks the next
