@@ -62,24 +62,23 @@ def _rows(isotropic) -> RowSplit:
 def world_momentum(q, inertia, omega, isotropic):
     """L = I_w ω. For an isotropic body I_w = I 1 in any pose (COURSE.md 3),
     so L = I ω without turning ω into the body frame and back."""
-    rows = _rows(isotropic)
-    L = inertia[:, :1] * omega
-    if not rows.all_iso:
-        a = rows.aniso
-        qa = q[a]
-        L[a] = qt.rotate(qa, inertia[a] * qt.rotate_inverse(qa, omega[a]))
-    return L
+    return _world_diagonal(q, inertia, omega, _rows(isotropic))
 
 
 def world_velocity(q, inv_inertia, L, isotropic):
     """ω = I_w⁻¹ L (the inverse of world_momentum)."""
-    rows = _rows(isotropic)
-    omega = inv_inertia[:, :1] * L
+    return _world_diagonal(q, inv_inertia, L, _rows(isotropic))
+
+
+def _world_diagonal(q, diagonal, v, rows):
+    """R diag(d) Rᵀ v per body: the principal-axis diagonal `d` applied in
+    world axes; isotropic rows need only d v."""
+    out = diagonal[:, :1] * v
     if not rows.all_iso:
         a = rows.aniso
         qa = q[a]
-        omega[a] = qt.rotate(qa, inv_inertia[a] * qt.rotate_inverse(qa, L[a]))
-    return omega
+        out[a] = qt.rotate(qa, diagonal[a] * qt.rotate_inverse(qa, v[a]))
+    return out
 
 
 def turn(q, omega, h):

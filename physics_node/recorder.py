@@ -332,20 +332,12 @@ class Recorder:
                 chunk.channels.setdefault(channel_id)
             chunk.indexed.add(ids)
         self._batches[ids] += 1
-        if chunk.num_messages == 0:
-            chunk.start_time = time_ns
-        elif time_ns < chunk.start_time:
-            chunk.start_time = time_ns
-        if time_ns > chunk.end_time:
-            chunk.end_time = time_ns
+        chunk.start_time, chunk.end_time = _widen(chunk.start_time, chunk.end_time, chunk.num_messages, time_ns)
         chunk.num_messages += n
         stats = self._stats
-        if stats.message_count == 0:
-            stats.message_start_time = time_ns
-        elif time_ns < stats.message_start_time:
-            stats.message_start_time = time_ns
-        if time_ns > stats.message_end_time:
-            stats.message_end_time = time_ns
+        stats.message_start_time, stats.message_end_time = _widen(
+            stats.message_start_time, stats.message_end_time, stats.message_count, time_ns
+        )
         stats.message_count += n
         if chunk.size > self._chunk_size:
             self._finish_chunk()
@@ -397,3 +389,11 @@ class Recorder:
     def _raise(self, sink):
         self._reported = sink.error
         raise RecorderError(f"recording {self.path}: writing failed: {sink.error!r}") from sink.error
+
+
+def _widen(start, end, count, time_ns):
+    """A (start, end) log-time range of `count` messages widened to hold
+    `time_ns`; with no messages yet the range starts there."""
+    if count == 0 or time_ns < start:
+        start = time_ns
+    return start, (time_ns if time_ns > end else end)
