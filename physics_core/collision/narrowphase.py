@@ -159,14 +159,12 @@ def _kernel_rows(model, a, b, margin, pos=None, quat=None, pair_poses=None):
         if len(direct) + len(swapped) == 0:
             continue
         f, s = _gather(direct, swapped, a, b), _gather(direct, swapped, b, a)
-        qf = qs = None
         if pair_poses is None:
-            pf, ps = pos.take(f, axis=0), pos.take(s, axis=0)
-            if turns:
-                qf, qs = quat.take(f, axis=0), quat.take(s, axis=0)
+            pf, ps, qf, qs = _body_poses(f, s, pos, quat, turns)
         else:
             pa, qa, pb, qb = pair_poses
             pf, ps = _gather(direct, swapped, pa, pb), _gather(direct, swapped, pb, pa)
+            qf = qs = None
             if turns:
                 qf, qs = _gather(direct, swapped, qa, qb), _gather(direct, swapped, qb, qa)
         row, slot, point, normal, depth = kernel(model, f, s, pf, qf, ps, qs, margin)
@@ -182,6 +180,15 @@ def _kernel_rows(model, a, b, margin, pos=None, quat=None, pair_poses=None):
     return tuple(np.concatenate(col) for col in zip(*parts))
 
 
+def _body_poses(f, s, pos, quat, turns):
+    """Positions of the pairs' bodies f and s, and their orientations when
+    the kernel turns them (else None)."""
+    pf, ps = pos.take(f, axis=0), pos.take(s, axis=0)
+    if not turns:
+        return pf, ps, None, None
+    return pf, ps, quat.take(f, axis=0), quat.take(s, axis=0)
+
+
 _CODES = 8      # shape codes are below this
 # pair kind code -> (kernel, uses orientations, stored the other way round)
 _ONE_KIND = {}
@@ -193,11 +200,8 @@ for _first, _second, _kernel, _turns in KERNELS:
 def _one_kind(model, a, b, margin, pos, quat, pair_poses, kernel, turns, swapped):
     """_kernel_rows when every pair is of one kind: the kernel runs on the pairs as given."""
     f, s = (b, a) if swapped else (a, b)
-    qf = qs = None
     if pair_poses is None:
-        pf, ps = pos.take(f, axis=0), pos.take(s, axis=0)
-        if turns:
-            qf, qs = quat.take(f, axis=0), quat.take(s, axis=0)
+        pf, ps, qf, qs = _body_poses(f, s, pos, quat, turns)
     else:
         pa, qa, pb, qb = pair_poses
         pf, ps, qf, qs = (pb, pa, qb, qa) if swapped else (pa, pb, qa, qb)
