@@ -183,14 +183,20 @@ def test_a_writer_error_reaches_the_caller(tmp_path):
     assert Recording(path).chunk_count >= 1  # what was written before the disk filled
 
 
-def test_a_writer_error_during_close_is_raised_by_close(tmp_path):
-    path = tmp_path / "full-at-close.mcap"
+def _poses_on_a_small_disk(path):
+    """A recorder whose disk fills at 4000 bytes, holding 100 steps of poses
+    in one open chunk (so nothing has been written yet)."""
     rec = Recorder(path, chunk_size=1 << 20, flush_period=float("inf"))
     rec._open_file = lambda: FullDisk(path, limit=4000)
     rec.open()
     ids = [rec.channel("/physics/poses", PoseArray)]
-    for k, (t, datas) in enumerate(_steps(100)):  # one chunk, written by close
+    for k, (t, datas) in enumerate(_steps(100)):
         rec.write_many(ids, datas[1:2], t, k)
+    return rec
+
+
+def test_a_writer_error_during_close_is_raised_by_close(tmp_path):
+    rec = _poses_on_a_small_disk(tmp_path / "full-at-close.mcap")  # one chunk, written by close
     with pytest.raises(RecorderError) as raised:
         rec.close()
     assert isinstance(raised.value.__cause__, OSError)
@@ -199,13 +205,7 @@ def test_a_writer_error_during_close_is_raised_by_close(tmp_path):
 
 
 def test_a_writer_error_is_raised_by_flush(tmp_path):
-    path = tmp_path / "full-at-flush.mcap"
-    rec = Recorder(path, chunk_size=1 << 20, flush_period=float("inf"))
-    rec._open_file = lambda: FullDisk(path, limit=4000)
-    rec.open()
-    ids = [rec.channel("/physics/poses", PoseArray)]
-    for k, (t, datas) in enumerate(_steps(100)):
-        rec.write_many(ids, datas[1:2], t, k)
+    rec = _poses_on_a_small_disk(tmp_path / "full-at-flush.mcap")
     with pytest.raises(RecorderError):
         rec.flush()
     rec.close()
