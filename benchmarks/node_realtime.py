@@ -442,7 +442,7 @@ def add_overheads(rows):
     plain = {(r["case"], r.get("executor")): r for r in rows if not r["record"]}
     for r in rows:
         base = plain.get((r["case"], r.get("executor")))
-        for key, clock in (("", "step_mean_ms"), ("_cpu", "step_cpu_ms"), ("_process", "process_cpu_ms")):
+        for key, clock in (("", "step_mean_ms"), ("_cpu", "step_cpu_ms")):
             if r["record"] and base and r[clock] and base[clock]:
                 r[f"record_overhead{key}_ms"] = r[clock] - base[clock]
                 r[f"record_overhead{key}_share"] = r[f"record_overhead{key}_ms"] / r[clock]
