@@ -20,6 +20,7 @@ $(STAMP): setup.py package.xml
 	$(PIP) install -q --upgrade pip
 	$(PIP) install -q $(ROS_DEPS)
 	$(PIP) install -q -e '.[test,bench]'
+	$(PY) -m physics_core.warm_up
 	touch $(STAMP)
 
 run: install

@@ -16,7 +16,7 @@ setup(
     package_data={"physics_core": ["data/*.yaml"]},
     include_package_data=True,
     python_requires=">=3.11",
-    install_requires=["numpy>=1.24", "pyyaml>=6", "mcap>=1.1"],
+    install_requires=["numpy>=1.24", "pyyaml>=6", "mcap>=1.1", "numba>=0.60"],
     extras_require={
         "ros": ["ros-jazzy-rclpy", "ros-jazzy-rmw-fastrtps-cpp", "ros-jazzy-common-interfaces"],
         "test": ["pytest>=7", "hypothesis>=6", "rosbags>=0.10"],

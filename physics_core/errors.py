@@ -33,4 +33,11 @@ class CommandError(PhysicsError, ValueError):
 
 
 class NonFiniteStateError(PhysicsError, FloatingPointError):
-    """The state became NaN or infinite after a stage; names the stage and body."""
+    """The state became NaN or infinite after a stage; names the stage and body.
+
+    ``stage`` is the stage's name, ``bodies`` the indices of the bodies."""
+
+    def __init__(self, message, stage=None, bodies=()):
+        super().__init__(message)
+        self.stage = stage
+        self.bodies = tuple(int(i) for i in bodies)

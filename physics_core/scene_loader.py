@@ -341,6 +341,7 @@ def build_model(scene) -> Model:
         gravity=None if gravity is None else frozen_array(gravity),
         effects=MappingProxyType(effects), dt=dt, substeps=substeps, integrator=integrator,
         initial=initial, source_text=text, source_path=path,
+        extra=MappingProxyType({"friction_pairs": MappingProxyType(extra_pairs)}),
     )
 
 

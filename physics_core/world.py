@@ -6,7 +6,7 @@
     per substep (`world.substeps` of them, h = dt / substeps):
       integrate  – the scene's integrator over the declared force effects
       <contact stages> – only when the scene declares `contacts`
-    finite     – refuse NaN/inf: report the body instead of propagating it
+    finite     – after every stage: refuse NaN/inf, naming the stage and the bodies
 
 Each stage, and each force effect inside `integrate`, is timed into
 `world.profile` (seconds, cumulative) and `world.last_step_profile`.
@@ -25,11 +25,15 @@ from time import perf_counter
 import numpy as np
 
 from . import quaternion as qt
+from .body_set import parse_new_body, with_body, without_body
 from .body_view import BodyView
+from .collision.contact_substep import STAGE_NAMES
 from .contact_events import ContactEvents
+from .cycle_clock import SECONDS_PER_CYCLE
 from .effects import Kinematics, build_force_effects, potential_energy
 from .effects.springs import makes_torque, stable_substeps
 from .errors import CommandError, NonFiniteStateError
+from .finite import non_finite_bodies
 from .free_rotation import RowSplit, isotropic_rows
 from .integrators import INTEGRATORS
 from .shapes import BOX
@@ -37,15 +41,34 @@ from .state import State
 from .vec3 import cross
 
 
+class SubstepContext:
+    """What a contact stage is given for one substep: its length h (s), its
+    index and whether it is the step's last, the poses at its start (time of
+    impact, COURSE.md 5) and the solver's inverse masses and inertias (zero
+    for static and sleeping bodies; a stage that wakes or puts bodies to
+    sleep replaces them here)."""
+    __slots__ = ("h", "index", "last", "prev_pos", "prev_quat", "inv_mass", "inv_inertia")
+
+    def __init__(self, h, index, last, prev_pos, prev_quat, inv_mass, inv_inertia):
+        self.h, self.index, self.last = h, index, last
+        self.prev_pos, self.prev_quat = prev_pos, prev_quat
+        self.inv_mass, self.inv_inertia = inv_mass, inv_inertia
+
+
 class World:
     def __init__(self, model):
-        self.model = model
+        self.scene_model = model          # reset() returns to these bodies
         self.state = State.from_initial(model.initial)
         self.contacts = ContactEvents.empty()
-        self.profile = defaultdict(float)
+        self._profile = defaultdict(float)
         self.last_step_profile = {}
         self.last_step_seconds = 0.0
         self._prof = {}   # the current step's timings; forces() may also be called between steps
+        self._build(model)
+
+    def _build(self, model):
+        """Everything the step derives from the model (again after add/remove_body)."""
+        self.model = model
         self._force_effects = build_force_effects(model)
         self._timed_effects = [("force:" + name, apply) for name, apply in self._force_effects]
         self.spring_substeps = stable_substeps(model, model.dt)
@@ -53,10 +76,11 @@ class World:
         self._integrate = INTEGRATORS[model.integrator]
         self.isotropic = isotropic_rows(model.inertia)   # free rotation is exact for these
         self.rotation_rows = RowSplit(self.isotropic)    # ... and needs no splitting
-        self._contact_stages = []
+        self.contact_system = None
         if "contacts" in model.effects:
-            from .collision import build_contact_stages
-            self._contact_stages = build_contact_stages(model)
+            from .collision import ContactSystem
+            from .contact_params import ContactParams
+            self.contact_system = ContactSystem(model, model.effects["contacts"] or ContactParams())
         # Effects whose forces can turn a body; with none of these, no commanded
         # torque and no spin, the rotational update is skipped. Contacts change
         # ω directly (not through forces), so the test is made per substep.
@@ -71,8 +95,9 @@ class World:
         """Names of the stages this scene's step runs, in order (promise 3)."""
         names = ["impulses", "integrate"]
         names += [f"force:{n}" for n, _ in self._force_effects]
-        names += [n for n, _ in self._contact_stages]
-        return names + ["finite"]
+        if self.contact_system is not None:
+            names += self.contact_system.stage_names
+        return names + ["finite"]     # the checks after every stage, timed together
 
     def step(self, n: int = 1):
         for _ in range(int(n)):
@@ -88,27 +113,39 @@ class World:
             self._timed("impulses", self._apply_impulses)
         h = self.model.dt / self.substeps
         for sub in range(self.substeps):
-            self.substep = sub
             self.rotating = bool(self._model_torque or s.has_user_torque or s.omega.any())
-            if self._contact_stages:
+            cs = self.contact_system
+            if cs is not None:
                 # start-of-substep pose, for time of impact and contact normals (COURSE.md 5)
-                self.prev_pos = s.pos.copy()
-                self.prev_quat = s.quat.copy()
+                ctx = SubstepContext(h, sub, sub == self.substeps - 1, s.pos.copy(), s.quat.copy(),
+                                     self.inv_mass[:, 0], self.inv_inertia)
             t0 = perf_counter()
             self._integrate(self, h)
             prof["integrate"] = prof.get("integrate", 0.0) + perf_counter() - t0
-            for name, stage in self._contact_stages:
-                t0 = perf_counter()
-                stage(self, h)
-                prof[name] = prof.get(name, 0.0) + perf_counter() - t0
+            self._check_finite("integrate")
+            if cs is not None:
+                failed = cs.substep(self, ctx)
+                if failed >= 0:
+                    self._check_finite(STAGE_NAMES[failed])
+                # (bodies that woke or slept had their inverse masses set in place)
         s.step_index += 1
         s.time = s.step_index * self.model.dt
-        self._timed("finite", self._check_finite)
+        if self.contact_system is not None:
+            self.contacts = self.contact_system.events()
         self.last_step_seconds = perf_counter() - start
         self.last_step_profile = prof
         for k, v in prof.items():
-            self.profile[k] += v
-        self.profile["step"] += self.last_step_seconds
+            self._profile[k] += v
+        self._profile["step"] += self.last_step_seconds
+
+    @property
+    def profile(self):
+        """Seconds spent per stage since the World was made (cumulative)."""
+        out = dict(self._profile)
+        if self.contact_system is not None:
+            for name, c in self.contact_system.timed_stages():
+                out[name] = out.get(name, 0.0) + c * SECONDS_PER_CYCLE
+        return out
 
     def _timed(self, name, fn):
         t0 = perf_counter()
@@ -143,17 +180,19 @@ class World:
         s.angular_impulse[:] = 0.0
         s.has_pending_impulse = False
 
-    def _check_finite(self):
+    def _check_finite(self, stage):
+        """Refuse NaN/inf at the end of `stage`: report the bodies instead of
+        propagating them (the state is left as that stage made it)."""
         s = self.state
-        total = s.pos.sum() + s.vel.sum() + s.omega.sum() + s.quat.sum()
-        if not math.isfinite(total):
-            bad = ~(np.isfinite(s.pos).all(1) & np.isfinite(s.vel).all(1)
-                    & np.isfinite(s.omega).all(1) & np.isfinite(s.quat).all(1))
-            names = [self.model.names[i] for i in np.flatnonzero(bad)]
+        t0 = perf_counter()
+        bad = non_finite_bodies(s.pos, s.quat, s.vel, s.omega)
+        self._prof["finite"] = self._prof.get("finite", 0.0) + perf_counter() - t0
+        if len(bad):
+            names = [self.model.names[i] for i in bad]
             raise NonFiniteStateError(
-                f"step {s.step_index}: non-finite state for bodies {names[:10]}"
-                + (f" (+{len(names) - 10} more)" if len(names) > 10 else "")
-                + "; stage timings " + ", ".join(self._prof))
+                f"step {s.step_index + 1}, stage {stage!r}: non-finite state for bodies "
+                f"{names[:10]}" + (f" (+{len(names) - 10} more)" if len(names) > 10 else ""),
+                stage=stage, bodies=bad)
 
     # ---- awake set ------------------------------------------------------
     def refresh_awake(self):
@@ -285,7 +324,44 @@ class World:
         return (cross(r, mass[:, None] * s.vel) + spin).sum(axis=0)
 
     def reset(self):
-        """Back to the scene's initial state at time 0 (commands cleared)."""
+        """Back to the scene's own bodies and initial state at time 0 (commands cleared)."""
+        if self.model is not self.scene_model:
+            self._build(self.scene_model)
         self.state = State.from_initial(self.model.initial)
         self.contacts = ContactEvents.empty()
+        if self.contact_system is not None:
+            self.contact_system.reset()
         self.refresh_awake()
+
+    # ---- bodies added and removed between steps ----------------------------
+    def add_body(self, spec) -> BodyView:
+        """Add a body given with the scene's body keys (validated as in a scene
+        file; SceneError names the key). It starts awake, with no loads, as the
+        last body; the other bodies keep their indices, states and contacts."""
+        body = parse_new_body(self.model, spec)
+        n = self.model.n
+        model = with_body(self.model, body)
+        self.state.append_body(body["pos"], body["quat"], body["vel"], body["omega"])
+        self._bodies_changed(model, np.arange(n))
+        return BodyView(self, n)
+
+    def remove_body(self, name):
+        """Remove a body; the bodies after it move one index down. Its contacts
+        end (an `end` event at the next step); springs attached to it go too."""
+        i = self.model.index.get(name)
+        if i is None:
+            raise CommandError(f"unknown body {name!r}; bodies are: {', '.join(self.model.names)}")
+        if self.model.n == 1:
+            raise CommandError(f"cannot remove {name!r}: a world keeps at least one body")
+        model = without_body(self.model, i)
+        self.state.remove_body(i)
+        new_index = np.arange(self.model.n) - (np.arange(self.model.n) > i)
+        new_index[i] = -1
+        self._bodies_changed(model, new_index)
+
+    def _bodies_changed(self, model, new_index):
+        """Rebuild the step for `model`; new_index[old body] = its new index (-1: removed)."""
+        old = self.contact_system
+        self._build(model)
+        if old is not None and self.contact_system is not None:
+            self.contact_system.bodies_changed(old, new_index)

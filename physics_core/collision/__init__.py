@@ -31,11 +31,6 @@ cross it). After the solve every body is moved by (v − u0) h, the position
 the integrator would have given with the solved velocity, so the pair ends
 the substep touching, not overlapping.
 """
-from ..contact_params import ContactParams
-from .pipeline import ContactPipeline
+from .contact_system import ContactSystem
 
-
-def build_contact_stages(model):
-    """[(name, fn(world, h))] for the contact pipeline this scene declares."""
-    params = model.effects.get("contacts") or ContactParams()
-    return ContactPipeline(model, params).stages()
+__all__ = ["ContactSystem"]

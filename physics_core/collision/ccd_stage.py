@@ -34,11 +34,37 @@ class CcdConstants:
         self.quarter_min2 = (0.49 * smallest) ** 2   # (under ½ the smallest threshold)², room for round-off
 
 
+class CcdStage:
+    """The ccd stage: stage(world, ctx) marks the bodies it moves back in the
+    contact scratch (`rewound`), for the collide and correct stages."""
+
+    def __init__(self, model, params, scratch):
+        self.params = params
+        self.consts = CcdConstants(model, params)
+        self.scratch = scratch
+
+    def __call__(self, world, ctx):
+        back = rewind_fast_bodies(world, ctx.h, self.params, ctx.prev_pos, ctx.prev_quat,
+                                  self.consts)
+        if back is not None:
+            sc = self.scratch(world)
+            sc.rewound[back] = True
+            sc.any_rewound = True
+
+
 def ccd(world, h, params, scratch, consts=None):
-    model, s = world.model, world.state
     scratch.rewound = None
+    back = rewind_fast_bodies(world, h, params, world.prev_pos, world.prev_quat, consts)
+    if back is not None:
+        rewound = np.zeros(world.model.n, bool)
+        rewound[back] = True
+        scratch.rewound = rewound
+
+
+def rewind_fast_bodies(world, h, params, p0, q0, consts=None):
+    """Indices of the bodies moved back to their time of impact (None: none)."""
+    model, s = world.model, world.state
     consts = consts or CcdConstants(model, params)
-    p0, q0 = world.prev_pos, world.prev_quat
     # cheap bound first: no point moves further than |Δc| + R θ, θ ≈ |ω| h (taken
     # twice, as the integrator's ω may differ within the substep); a sleeping
     # body has not moved (reach 0) and static ones have an infinite threshold
@@ -78,6 +104,4 @@ def ccd(world, h, params, scratch, consts=None):
         return
     s.pos[back], s.quat[back] = toi.interpolate_poses(p0[back], q0[back], s.pos[back],
                                                       s.quat[back], first[back])
-    rewound = np.zeros(model.n, bool)
-    rewound[back] = True
-    scratch.rewound = rewound
+    return back

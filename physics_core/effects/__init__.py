@@ -3,6 +3,10 @@ that adds into the force and torque accumulators (MuJoCo's passive-force style).
 
 Only effects the scene declares are built (promise 3): an undeclared effect
 is not in the list and costs nothing.
+
+`make` computes the effect's per-body constants once; `apply` is a thin
+wrapper over one compiled loop (Numba) over the bodies, pairs or springs
+that adds into the accumulators.
 """
 from . import buoyancy, drag, gravitation, gravity, springs
 

@@ -2,31 +2,51 @@
 
 Softened (Plummer): F_i = Σ_j G m_i m_j d_ij / (|d_ij|² + ε²)^{3/2}, so
 coincident bodies feel no infinite force (d = 0 gives exactly 0). Each
-pair's term is computed from the same operands in both directions, so it is
-equal and opposite to the last bit (Newton 3); only the row sums round.
-Evaluated in row blocks to keep memory at O(block · n).
+pair's term is computed once, from the same operands, and added to one body
+and subtracted from the other, so it is equal and opposite to the last bit
+(Newton 3); only the sums per body round. Each body's sum runs over the
+others in index order. A compiled O(n²) loop over pairs, with O(n) memory.
 """
-import numpy as np
+import math
 
-BLOCK = 512
+import numpy as np
+from numba import njit
+
+BLOCK = 512     # rows per block of the (numpy) potential
+
+
+@njit(cache=True)
+def pair_forces(pos, idx, m, G, eps2, force):
+    """force[idx] += Σ_j G m_i m_j d_ij / (|d_ij|² + ε²)^{3/2}, d_ij = x_j − x_i."""
+    n = len(idx)
+    acc = np.zeros((n, 3))
+    for a in range(n):
+        i = idx[a]
+        for b in range(a + 1, n):
+            j = idx[b]
+            dx, dy, dz = pos[j, 0] - pos[i, 0], pos[j, 1] - pos[i, 1], pos[j, 2] - pos[i, 2]
+            r2 = dx * dx + dy * dy + dz * dz + eps2
+            w = (G * (m[a] * m[b])) / (r2 * math.sqrt(r2))
+            acc[a, 0] += w * dx
+            acc[a, 1] += w * dy
+            acc[a, 2] += w * dz
+            acc[b, 0] -= w * dx
+            acc[b, 1] -= w * dy
+            acc[b, 2] -= w * dz
+    for a in range(n):
+        for k in range(3):
+            force[idx[a], k] += acc[a, k]
 
 
 def make(model):
     p = model.effects["gravitation"]
     idx = np.flatnonzero(model.mass > 0)
-    m = model.mass[idx]
-    eps2 = p.softening ** 2
-    G = p.G
+    m = np.ascontiguousarray(model.mass[idx], dtype=float)
+    eps2 = float(p.softening ** 2)
+    G = float(p.G)
 
     def apply(kin, force, torque):
-        x = kin.pos[idx]
-        acc = np.empty_like(x)
-        for s in range(0, len(idx), BLOCK):
-            d = x[None, :, :] - x[s:s + BLOCK, None, :]
-            r2 = np.einsum("ijk,ijk->ij", d, d) + eps2
-            w = (G * (m[s:s + BLOCK, None] * m[None, :])) / (r2 * np.sqrt(r2))
-            acc[s:s + BLOCK] = np.einsum("ij,ijk->ik", w, d)
-        force[idx] += acc
+        pair_forces(kin.pos, idx, m, G, eps2, force)
     return apply
 
 

@@ -15,14 +15,19 @@ gives the sub-step count that keeps ω h ≤ MAX_OMEGA_H and the damper's rate
 internal sub-steps. Explicit Euler grows an undamped oscillation by
 √(1 + ω²h²) every step whatever h is: sub-steps slow the growth but cannot
 stop it, so stiff undamped springs need another integrator.
+
+The forces are one compiled loop over the springs (`spring_forces`), then
+one over each end adding them to the bodies in spring order.
 """
 import math
 import warnings
 
 import numpy as np
+from numba import njit
 
 from .. import quaternion as qt
-from ..vec3 import cross, dot
+from ..quaternion import cross_one, rotate_one, row3, row4
+from ..vec3 import cross
 
 MAX_OMEGA_H = 0.5       # rad per sub-step: stable with margin; period error ≈ (ω h)²/24 ≤ 1 %
 MAX_DAMPING_H = 0.5     # (C/m_eff) h: the damper removes at most about half the relative speed per sub-step
@@ -119,28 +124,99 @@ def makes_torque(model) -> bool:
     return any(end.turns for end in _ends(model)) if len(model.springs) else False
 
 
+_ZERO3 = (0.0, 0.0, 0.0)
+
+
+@njit(cache=True)
+def _end_state(on_body, turns, local, fixed, p, q, v, w):
+    """World point, arm from the body's centre and velocity of one spring end,
+    from the body's pose (p, q) and velocities (v, ω); a world end is its fixed
+    point, at rest. Tuples only: no array passes through the per-spring call."""
+    if not on_body:
+        return fixed, _ZERO3, _ZERO3
+    if not turns:
+        return p, _ZERO3, v
+    arm = rotate_one(q, local)
+    spin = cross_one(w, arm)
+    return ((p[0] + arm[0], p[1] + arm[1], p[2] + arm[2]), arm,
+            (v[0] + spin[0], v[1] + spin[1], v[2] + spin[2]))
+
+
+@njit(cache=True)
+def _at(a, e, s):
+    """a[e, s] of an (2, m, 3) array as a 3-tuple."""
+    return (a[e, s, 0], a[e, s, 1], a[e, s, 2])
+
+
+@njit(cache=True)
+def _pull(pa, va, pb, vb, k, l0, c, damped):
+    """F_a = [K (l − l₀) + C (v_pb − v_pa)·u] u, u = (p_b − p_a)/l (0 for l = 0)."""
+    d = (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2])
+    length = math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+    scale = length if length > 0 else 1.0
+    u = (d[0] / scale, d[1] / scale, d[2] / scale)
+    tension = k * (length - l0)
+    if damped:
+        tension = tension + c * ((vb[0] - va[0]) * u[0] + (vb[1] - va[1]) * u[1] + (vb[2] - va[2]) * u[2])
+    return (tension * u[0], tension * u[1], tension * u[2])
+
+
+@njit(cache=True)
+def _add_to_bodies(out, body, f, sign):
+    """out[body[s]] += sign f[s] over the springs whose end is on a body, in spring order."""
+    for s in range(len(body)):
+        if body[s] >= 0:
+            for k in range(3):
+                out[body[s], k] += sign * f[s, k]
+
+
+@njit(cache=True)
+def _add_torques(out, body, arm, f, sign):
+    """out[body[s]] += arm[s] × (sign f[s]) over the springs whose end is on a body."""
+    for s in range(len(body)):
+        if body[s] >= 0:
+            t = cross_one(row3(arm, s), (sign * f[s, 0], sign * f[s, 1], sign * f[s, 2]))
+            for k in range(3):
+                out[body[s], k] += t[k]
+
+
+@njit(cache=True)
+def spring_forces(body, local, fixed, turns, stiffness, rest, damping, damped, pos, quat, vel, omega,
+                  force, torque):
+    """Every spring's pull, then F and τ = r × F added at each end (a: +F, b: −F)."""
+    m = body.shape[1]
+    f = np.empty((m, 3))
+    arm = np.empty((2, m, 3))
+    for s in range(m):
+        i, j = max(body[0, s], 0), max(body[1, s], 0)        # a world end reads row 0, unused
+        pa, ra, va = _end_state(body[0, s] >= 0, turns[0], _at(local, 0, s), _at(fixed, 0, s), row3(pos, i),
+                                row4(quat, i), row3(vel, i), row3(omega, i))
+        pb, rb, vb = _end_state(body[1, s] >= 0, turns[1], _at(local, 1, s), _at(fixed, 1, s), row3(pos, j),
+                                row4(quat, j), row3(vel, j), row3(omega, j))
+        f[s, 0], f[s, 1], f[s, 2] = _pull(pa, va, pb, vb, stiffness[s], rest[s], damping[s], damped)
+        arm[0, s, 0], arm[0, s, 1], arm[0, s, 2] = ra
+        arm[1, s, 0], arm[1, s, 1], arm[1, s, 2] = rb
+    _add_to_bodies(force, body[0], f, 1.0)
+    _add_to_bodies(force, body[1], f, -1.0)
+    if turns[0]:
+        _add_torques(torque, body[0], arm[0], f, 1.0)
+    if turns[1]:
+        _add_torques(torque, body[1], arm[1], f, -1.0)
+
+
 def make(model):
     s = model.springs
-    k, l0, c = s.stiffness, s.rest_length, s.damping
-    end_a, end_b = _ends(model)
+    ends = _ends(model)
+    body = np.ascontiguousarray(np.stack([np.where(e.on_body, e.row, -1) for e in ends]), dtype=np.int64)
+    local = np.ascontiguousarray(np.stack([e.local for e in ends]), dtype=float)
+    fixed = np.ascontiguousarray(np.stack([e.fixed for e in ends]), dtype=float)
+    turns = np.array([e.turns for e in ends])
+    k, l0, c = (np.ascontiguousarray(a, dtype=float) for a in (s.stiffness, s.rest_length, s.damping))
     damped = bool(np.any(c))
 
     def apply(kin, force, torque):
-        pa, ra, va = end_a.points(kin)
-        pb, rb, vb = end_b.points(kin)
-        d = pb - pa
-        length = np.sqrt(dot(d, d))
-        u = d / np.where(length > 0, length, 1.0)[:, None]
-        tension = k * (length - l0)
-        if damped:
-            tension = tension + c * dot(vb - va, u)
-        f = tension[:, None] * u
-        end_a.accumulate(force, f)
-        end_b.accumulate(force, -f)
-        if ra is not None:
-            end_a.accumulate(torque, cross(ra, f))
-        if rb is not None:
-            end_b.accumulate(torque, cross(rb, -f))
+        spring_forces(body, local, fixed, turns, k, l0, c, damped, kin.pos, kin.quat, kin.vel, kin.omega,
+                      force, torque)
     return apply
 
 

@@ -1,0 +1,76 @@
+"""What the compiled contact stages share, packed into a few tuples (a jitted
+call pays per argument, and a loop over steps in compiled code passes them
+along for nothing).
+
+- `ContactModel`: the frozen per-body data the stages read (shape,
+  material, restitution, the model's inverse masses) and the friction table.
+- `ContactParams` as two arrays: floats `fp` and integers `ip`, indexed by
+  the names below (the `effects.contacts` keys of contact_params.py).
+- the warm-start cache in numba typed lists, so compiled code can replace
+  its arrays as the contact set changes and the change stays with the
+  World; the sleep timers (fixed size) as plain arrays.
+"""
+from collections import namedtuple
+
+import numpy as np
+from numba import typed, types
+
+from .contact_build import RESTITUTION_RULES
+from .geometry import Geometry
+
+ContactModel = namedtuple("ContactModel", "kind dims is_static reach material restitution "
+                                          "inv_mass inv_inertia mu_static mu_kinetic")
+
+# float parameters (fp)
+(MARGIN, STATIC_SPEED, WARM_FRACTION, VELOCITY_TOLERANCE, RESTITUTION_THRESHOLD,
+ RESTITUTION_RAMP, SLOP, CORRECTION_RATE, MAX_CORRECTION_SPEED, CCD_THRESHOLD, CCD_TOLERANCE,
+ SLEEP_LINEAR, SLEEP_ANGULAR, SLEEP_TIME, N_FP) = range(15)
+# integer parameters (ip)
+(ITERATIONS, POSITION_ITERATIONS, CCD_ITERATIONS, CCD_ON, SLEEP_ON, RULE, N_IP) = range(7)
+
+# the warm-start cache: per contact seen last substep, its key and (normal
+# impulse, friction impulse x y z, slip speed), ascending keys (warm_cache.py)
+WARM_NORMAL, WARM_FRICTION, WARM_SLIP, WARM_COLS = 0, 1, 4, 5
+
+
+def contact_model(model) -> ContactModel:
+    g = Geometry.from_model(model)
+    return ContactModel(g.kind, g.dims, g.is_static, g.reach,
+                        np.ascontiguousarray(model.material, dtype=np.int64),
+                        np.ascontiguousarray(model.restitution, dtype=np.float64),
+                        np.ascontiguousarray(model.inv_mass, dtype=np.float64),
+                        np.ascontiguousarray(model.inv_inertia, dtype=np.float64),
+                        np.ascontiguousarray(model.mu_static, dtype=np.float64),
+                        np.ascontiguousarray(model.mu_kinetic, dtype=np.float64))
+
+
+def contact_params(p):
+    """(fp, ip) arrays of a contact_params.ContactParams."""
+    fp = np.empty(N_FP)
+    fp[[MARGIN, STATIC_SPEED, WARM_FRACTION, VELOCITY_TOLERANCE, RESTITUTION_THRESHOLD,
+        RESTITUTION_RAMP, SLOP, CORRECTION_RATE, MAX_CORRECTION_SPEED, CCD_THRESHOLD,
+        CCD_TOLERANCE, SLEEP_LINEAR, SLEEP_ANGULAR, SLEEP_TIME]] = (
+        p.margin, p.static_friction_speed, p.warm_start, p.velocity_tolerance,
+        p.restitution_threshold, p.restitution_ramp, p.slop, p.correction_rate,
+        p.max_correction_speed, p.ccd_threshold, p.ccd_tolerance, p.sleep_linear_speed,
+        p.sleep_angular_speed, p.sleep_time)
+    ip = np.empty(N_IP, np.int64)
+    ip[[ITERATIONS, POSITION_ITERATIONS, CCD_ITERATIONS, CCD_ON, SLEEP_ON, RULE]] = (
+        p.iterations, p.position_iterations, p.ccd_iterations, int(p.ccd), int(p.sleep),
+        RESTITUTION_RULES[p.restitution_combine])
+    return fp, ip
+
+
+def new_warm_cache():
+    """(keys, values): one-element typed lists, so compiled code can replace
+    the arrays (the contact set changes size) and the World keeps them."""
+    keys = typed.List.empty_list(types.Array(types.int64, 1, "C"))
+    keys.append(np.zeros(0, np.int64))
+    values = typed.List.empty_list(types.Array(types.float64, 2, "C"))
+    values.append(np.zeros((0, WARM_COLS)))
+    return keys, values
+
+
+def new_sleep_state(n):
+    """(timer, island, prev_awake, next_island) of sleep_islands.py."""
+    return (np.zeros(n), np.full(n, -1, np.int64), np.ones(n, np.bool_), np.zeros(1, np.int64))

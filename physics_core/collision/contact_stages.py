@@ -1,0 +1,154 @@
+"""The contact stages of one substep as compiled functions (see __init__ for
+the order), called by the compiled step loop (physics_core/step_loop.py).
+
+Each stage takes what it reads explicitly: the contact model and
+parameters (contact_data.py), the body arrays, the solver's inverse masses,
+and what the earlier stages of the same substep made (the rows, the times
+of impact, the bounce targets). What outlives a substep is in the warm
+cache, the sleep state and the event log's state.
+"""
+import numpy as np
+from numba import njit
+
+from .bounce import bounce_targets
+from .contact_build import build_rows
+from .contact_data import (CCD_ITERATIONS, CCD_THRESHOLD, CCD_TOLERANCE, CORRECTION_RATE,
+                           ITERATIONS, MARGIN, MAX_CORRECTION_SPEED, POSITION_ITERATIONS,
+                           RESTITUTION_RAMP, RESTITUTION_THRESHOLD, RULE, SLEEP_ANGULAR,
+                           SLEEP_LINEAR, SLEEP_ON, SLEEP_TIME, SLOP, STATIC_SPEED,
+                           VELOCITY_TOLERANCE, WARM_FRACTION)
+from .contact_layout import BODY_A, BODY_B, DEPTH, ICOL, LAM, NCOL
+from .detection import detect_arrays
+from .push_out import correct
+from .sequential_impulses import (friction_and_slip, least_mass, solve_normal_targets,
+                                  solve_velocities, warm_start)
+from .sleep_islands import _sync, _update, _wake_touched
+from .time_of_impact import rewind_fast_bodies
+from .warm_cache import warm_clear, warm_load, warm_store
+
+
+@njit(cache=True)
+def moving_bodies(is_static, awake):
+    out = np.empty(len(awake), np.bool_)
+    for i in range(len(awake)):
+        out[i] = awake[i] and not is_static[i]
+    return out
+
+
+@njit(cache=True)
+def solver_masses(cm, awake, inv_mass, inv_inertia):
+    """The solver's inverse masses: the model's, zero for sleeping bodies."""
+    for i in range(len(awake)):
+        w = 1.0 if awake[i] else 0.0
+        inv_mass[i] = cm.inv_mass[i] * w
+        for j in range(3):
+            inv_inertia[i, j] = cm.inv_inertia[i, j] * w
+
+
+@njit(cache=True)
+def ccd_stage(cm, fp, ip, pos, quat, omega, awake, p0, q0, toi):
+    moving = moving_bodies(cm.is_static, awake)
+    return rewind_fast_bodies(cm.kind, cm.dims, cm.reach, cm.is_static, moving, p0, q0, pos, quat,
+                              omega, fp[CCD_THRESHOLD], fp[MARGIN], ip[CCD_ITERATIONS],
+                              fp[CCD_TOLERANCE], toi)
+
+
+@njit(cache=True)
+def kept_rows(moving, a, b):
+    """Indices of the contacts with a moving body (a static–sleeping pair rests)."""
+    keep = np.empty(len(a), np.int64)
+    k = 0
+    for c in range(len(a)):
+        if moving[a[c]] or moving[b[c]]:
+            keep[k] = c
+            k += 1
+    return keep[:k]
+
+
+@njit(cache=True)
+def detect_stage(cm, fp, ip, pos, quat, awake, sleep, cap):
+    """Contacts at the end-of-substep poses, sleeping bodies touched by a moving
+    one woken (their islands too): (a, b, point, normal, depth, key, rows
+    computed, woke)."""
+    timer, island, prev_awake, next_island = sleep
+    if ip[SLEEP_ON]:
+        _sync(awake, timer, island, prev_awake)
+    (a, b, point, normal, depth, key), k = detect_arrays(cm.kind, cm.dims, cm.is_static, cm.reach,
+                                                         pos, quat, fp[MARGIN], cap)
+    woke = False
+    if ip[SLEEP_ON] and len(a):
+        woke = _wake_touched(awake, cm.is_static, a, b, fp[SLEEP_TIME], timer, island,
+                             prev_awake)
+    keep = kept_rows(moving_bodies(cm.is_static, awake), a, b)
+    if len(keep) < len(a):
+        a, b, point, normal = a[keep], b[keep], point[keep], normal[keep]
+        depth, key = depth[keep], key[keep]
+    return a, b, point, normal, depth, key, k, woke
+
+
+@njit(cache=True)
+def rows_stage(cm, fp, ip, contacts, pos, quat, vel, omega, inv_mass, inv_inertia, warm, toi, h):
+    """The contact rows (R, I) of the detected contacts, warm-started from the cache."""
+    a, b, point, normal, depth, key = contacts
+    R = np.empty((len(a), NCOL))
+    I = np.empty((len(a), ICOL), np.int64)
+    build_rows(R, I, a, b, point, normal, depth, pos, quat, vel, omega, inv_mass, inv_inertia,
+               cm.material, cm.mu_static, cm.mu_kinetic, cm.restitution, ip[RULE], h, toi)
+    warm_load(R, I, key, warm[0], warm[1], fp[WARM_FRACTION], fp[STATIC_SPEED])
+    return R, I
+
+
+@njit(cache=True)
+def solve_stage(fp, ip, R, I, key, vel, omega, warm):
+    """Warm start, sequential-impulse sweeps; the friction impulses (world
+    vectors) kept for the warm cache and the events. Returns them and the
+    sweeps done."""
+    if len(R) == 0:
+        warm_clear(warm[0], warm[1])
+        return np.zeros((0, 3)), 0
+    if fp[WARM_FRACTION] > 0.0:
+        warm_start(R, I, vel, omega)
+    # an impulse change dλ moves a row's relative velocity by about dλ / m_eff
+    limit = fp[VELOCITY_TOLERANCE] * least_mass(R) if fp[VELOCITY_TOLERANCE] > 0.0 else -1.0
+    sweeps = solve_velocities(R, I, vel, omega, ip[ITERATIONS], limit)
+    friction = np.empty((len(R), 3))
+    slip = np.empty(len(R))
+    friction_and_slip(R, I, vel, omega, friction, slip)
+    warm_store(warm[0], warm[1], key, R, friction, slip)
+    return friction, sweeps
+
+
+@njit(cache=True)
+def restitution_stage(fp, R, I, vel, omega, h):
+    """(target, τ) of the bounce pass (bounce.py), after it ran."""
+    target, tau = np.empty(len(R)), np.empty(len(R))
+    if bounce_targets(R, fp[RESTITUTION_THRESHOLD], fp[RESTITUTION_RAMP], h, target, tau):
+        solve_normal_targets(R, I, target, vel, omega)
+    return target, tau
+
+
+@njit(cache=True)
+def correct_stage(fp, ip, R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, h):
+    correct(R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, h, fp[SLOP],
+            fp[CORRECTION_RATE], fp[MAX_CORRECTION_SPEED], ip[POSITION_ITERATIONS])
+
+
+@njit(cache=True)
+def touching_edges(R, I):
+    """(a, b) of the contacts that touch (overlap or push): the sleep islands' edges."""
+    keep = np.empty(len(R), np.int64)
+    k = 0
+    for c in range(len(R)):
+        if R[c, DEPTH] >= 0.0 or R[c, LAM] > 0.0:
+            keep[k] = c
+            k += 1
+    return I[keep[:k], BODY_A].copy(), I[keep[:k], BODY_B].copy()
+
+
+@njit(cache=True)
+def sleep_stage(cm, fp, R, I, awake, vel, omega, sleep, dt):
+    """Rest timers, and islands at rest put to sleep; True when some body slept."""
+    timer, island, prev_awake, next_island = sleep
+    ea, eb = touching_edges(R, I)
+    return _update(awake, cm.is_static, vel, omega, ea, eb, dt, fp[SLEEP_LINEAR],
+                   fp[SLEEP_ANGULAR], fp[SLEEP_TIME], timer, island, prev_awake, next_island)

@@ -1,0 +1,97 @@
+"""All the contact stages of one substep in one compiled call (COURSE.md 5),
+each timed and followed by the finite check.
+
+Stage order (Box2D v3's): ccd, collide, solve, restitution, correct,
+events, and sleep on the step's last substep (see __init__). `run` returns
+-1, or the index of the stage after which some body's state was not
+finite (the caller names it and the bodies).
+"""
+import numpy as np
+from numba import njit
+
+from ..cycle_clock import cycles
+from ..finite import non_finite_bodies
+from .contact_data import CCD_ON, SLEEP_ON
+from .contact_layout import LAM, U0
+from .contact_stages import (ccd_stage, correct_stage, detect_stage, restitution_stage,
+                             rows_stage, sleep_stage, solve_stage, solver_masses)
+from .event_log import events_add, events_finish, events_reset
+
+CCD, COLLIDE, SOLVE, RESTITUTION, CORRECT, EVENTS, SLEEP, N_STAGES = range(8)
+STAGE_NAMES = ("ccd", "collide", "solve", "restitution", "correct", "events", "sleep")
+
+
+@njit(cache=True)
+def _finite(pos, quat, vel, omega):
+    return len(non_finite_bodies(pos, quat, vel, omega)) == 0
+
+
+@njit(cache=True)
+def _collide(cm, fp, ip, s, masses, sleep, warm, toi, h, cap):
+    """collide: detection, waking, rows; (contacts, R, I, rows computed)."""
+    pos, quat, vel, omega, awake = s
+    a, b, point, normal, depth, key, k, woke = detect_stage(cm, fp, ip, pos, quat, awake, sleep,
+                                                            cap)
+    if woke:
+        solver_masses(cm, awake, masses[0], masses[1])
+    contacts = (a, b, point, normal, depth, key)
+    R, I = rows_stage(cm, fp, ip, contacts, pos, quat, vel, omega, masses[0], masses[1], warm,
+                      toi, h)
+    return contacts, R, I, k
+
+
+@njit(cache=True)
+def _events(events, contacts, R, friction, moving_mask, last):
+    a, b, point, normal, depth, key = contacts
+    if len(R):
+        events_add(events, key, a, b, point, normal, depth, np.ascontiguousarray(R[:, LAM]),
+                   friction, -np.ascontiguousarray(R[:, U0]))
+    if last:
+        events_finish(events, moving_mask)
+
+
+@njit(cache=True)
+def run(cm, fp, ip, s, masses, p0, q0, sleep, warm, events, h, dt, first, last, cap, prof):
+    """The contact stages of one substep; -1 or the failing stage. s = (pos,
+    quat, vel, omega, awake); masses = the solver's (inv_mass, inv_inertia),
+    updated here when bodies wake or sleep; cap[0]: row-count guess, updated."""
+    pos, quat, vel, omega, awake = s
+    toi = np.full(len(pos), -1.0)
+    if first:
+        events_reset(events)
+    if ip[CCD_ON]:
+        t = cycles()
+        ccd_stage(cm, fp, ip, pos, quat, omega, awake, p0, q0, toi)
+        prof[CCD] += cycles() - t
+        if not _finite(pos, quat, vel, omega):
+            return CCD
+    t = cycles()
+    contacts, R, I, k = _collide(cm, fp, ip, s, masses, sleep, warm, toi, h, cap[0])
+    cap[0] = k + k // 8 + 4
+    vel0, omega0 = vel.copy(), omega.copy()
+    prof[COLLIDE] += cycles() - t
+    t = cycles()
+    friction, _ = solve_stage(fp, ip, R, I, contacts[5], vel, omega, warm)
+    prof[SOLVE] += cycles() - t
+    if not _finite(pos, quat, vel, omega):
+        return SOLVE
+    t = cycles()
+    target, tau = restitution_stage(fp, R, I, vel, omega, h)
+    prof[RESTITUTION] += cycles() - t
+    t = cycles()
+    correct_stage(fp, ip, R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, h)
+    prof[CORRECT] += cycles() - t
+    if not _finite(pos, quat, vel, omega):
+        return CORRECT
+    t = cycles()
+    moving = np.empty(len(awake), np.bool_)
+    for i in range(len(awake)):
+        moving[i] = awake[i] and not cm.is_static[i]
+    _events(events, contacts, R, friction, moving, last)
+    prof[EVENTS] += cycles() - t
+    if last and ip[SLEEP_ON]:
+        t = cycles()
+        if sleep_stage(cm, fp, R, I, awake, vel, omega, sleep, dt):
+            solver_masses(cm, awake, masses[0], masses[1])
+        prof[SLEEP] += cycles() - t
+    return -1

@@ -1,0 +1,210 @@
+"""Compiled collision detection: broad phase, then every pair's kernel, in
+one jitted call (COURSE.md 5: for each pair that touches, the contact
+point, the normal that separates the bodies, and the depth).
+
+`Detector(model).detect(pos, quat, margin)` returns what
+manifold.detect(model, pos, quat, margin) returns, under the Manifold
+contract (manifold.py): rows with depth > -margin, `a` static or the lower
+index, normal from a to b, key = pair_id * SLOTS + slot, sorted by key,
+keys unique. The pairs come from grid.py sorted by pair id and each kernel
+writes its rows in slot order, so the rows come out sorted. Rows go to a
+buffer that doubles when full; the kept ones are copied out at the end.
+
+`signed_depth(i, j, kind, dims, pa, qa, pb, qb, scratch)` is the compiled
+narrowphase.signed_depth of one pair at given poses, for other @njit code
+(a continuous-collision search); `depth_scratch()` makes its scratch.
+
+Hot loops here call kernels with few arrays and keep their branches on
+scalars: a numba call that takes arrays and branches keeps reference-count
+updates that can cost more than a sphere pair's arithmetic.
+"""
+import numpy as np
+from numba import njit
+
+from .box_pair import box_box, separation, workspace
+from .geometry import BOX, Geometry
+from .grid import candidate_pairs
+from .manifold import SLOTS, Manifold
+from .shape_pairs import (DEPTH, NORMAL_COL, POINT, ROW, SLOT, box_sphere, plane_box, plane_sphere,
+                          sphere_sphere)
+
+MAX_ROWS_PER_PAIR = 4
+SPHERE_SPHERE, PLANE_SPHERE, PLANE_BOX, BOX_SPHERE, BOX_BOX, NO_KERNEL = range(6)
+# by kind[a] * 3 + kind[b] (SPHERE 0, BOX 1, PLANE 2): the kernel, and whether
+# it takes the pair the other way round (its first body is b)
+_KERNEL = (SPHERE_SPHERE, BOX_SPHERE, PLANE_SPHERE, BOX_SPHERE, BOX_BOX, PLANE_BOX,
+           PLANE_SPHERE, PLANE_BOX, NO_KERNEL)
+_SWAPPED = (False, True, True, False, False, True, False, False, False)
+
+
+@njit(cache=True)
+def grow_rows(rows, row_pair, k):
+    """Row buffers twice as long, holding the first k rows."""
+    bigger = np.empty((2 * len(rows), ROW))
+    bigger[:k] = rows[:k]
+    pair = np.empty(2 * len(rows), np.int64)
+    pair[:k] = row_pair[:k]
+    return bigger, pair
+
+
+@njit(cache=True)
+def run_kernel(kernel, f, s, dims, pos, quat, margin, ws, rows, k):
+    """Rows of kernel `kernel` for bodies f, s (its order) from row k; the count."""
+    count = 0
+    if kernel == SPHERE_SPHERE:
+        count = sphere_sphere(f, s, dims, pos, quat, margin, ws, rows, k)
+    elif kernel == PLANE_SPHERE:
+        count = plane_sphere(f, s, dims, pos, quat, margin, ws, rows, k)
+    elif kernel == PLANE_BOX:
+        count = plane_box(f, s, dims, pos, quat, margin, ws, rows, k)
+    elif kernel == BOX_SPHERE:
+        count = box_sphere(f, s, dims, pos, quat, margin, ws, rows, k)
+    elif kernel == BOX_BOX:
+        count = box_box(f, s, dims, pos, quat, margin, ws, rows, k)
+    return count
+
+
+@njit(cache=True)
+def flip_normals(rows, k, count):
+    """Rows k..k+count: normal from the kernel's first body to its second → the other way."""
+    for r in range(k, k + count):
+        for m in range(NORMAL_COL, NORMAL_COL + 3):
+            rows[r, m] = -rows[r, m]
+
+
+@njit(cache=True)
+def pair_rows(a, b, kind, dims, pos, quat, margin, ws, rows, k):
+    """Rows of pair (a, b) from row k with the normal from a towards b; the
+    count. Not cut at the margin (single-row kinds always give one row)."""
+    code = kind[a] * 3 + kind[b]
+    swapped = _SWAPPED[code]
+    f, s = (b, a) if swapped else (a, b)
+    count = run_kernel(_KERNEL[code], f, s, dims, pos, quat, margin, ws, rows, k)
+    if swapped:
+        flip_normals(rows, k, count)
+    return count
+
+
+@njit(cache=True)
+def narrow_rows(pairs, kind, dims, pos, quat, margin, cap):
+    """(rows, row_pair, k): every pair's rows, in pair order, with its pair's
+    index (the kernel dispatch is written out here: see the module notes)."""
+    rows = np.empty((max(cap, 16), ROW))
+    row_pair = np.empty(len(rows), np.int64)
+    ws = workspace()
+    k = 0
+    for p in range(len(pairs)):
+        if k + MAX_ROWS_PER_PAIR > len(rows):
+            rows, row_pair = grow_rows(rows, row_pair, k)
+        code = kind[pairs[p, 0]] * 3 + kind[pairs[p, 1]]
+        kernel, swapped = _KERNEL[code], _SWAPPED[code]
+        f, s = (pairs[p, 1], pairs[p, 0]) if swapped else (pairs[p, 0], pairs[p, 1])
+        if kernel == SPHERE_SPHERE:
+            count = sphere_sphere(f, s, dims, pos, quat, margin, ws, rows, k)
+        elif kernel == PLANE_SPHERE:
+            count = plane_sphere(f, s, dims, pos, quat, margin, ws, rows, k)
+        elif kernel == BOX_SPHERE:
+            count = box_sphere(f, s, dims, pos, quat, margin, ws, rows, k)
+        elif kernel == BOX_BOX:
+            count = box_box(f, s, dims, pos, quat, margin, ws, rows, k)
+        else:
+            count = run_kernel(kernel, f, s, dims, pos, quat, margin, ws, rows, k)
+        if swapped:
+            flip_normals(rows, k, count)
+        for r in range(k, k + count):
+            row_pair[r] = p
+        k += count
+    return rows, row_pair, k
+
+
+@njit(cache=True)
+def manifold_arrays(rows, row_pair, k, pairs, margin, n):
+    """(a, b, point, normal, depth, key) of the rows with depth > -margin."""
+    kept = 0
+    for r in range(k):
+        kept += rows[r, DEPTH] > -margin
+    a, b, key = np.empty(kept, np.int64), np.empty(kept, np.int64), np.empty(kept, np.int64)
+    point, normal, depth = np.empty((kept, 3)), np.empty((kept, 3)), np.empty(kept)
+    w = 0
+    for r in range(k):
+        if rows[r, DEPTH] > -margin:
+            i, j = pairs[row_pair[r], 0], pairs[row_pair[r], 1]
+            a[w], b[w] = i, j
+            key[w] = (min(i, j) * n + max(i, j)) * SLOTS + np.int64(rows[r, SLOT])
+            point[w, 0], point[w, 1], point[w, 2] = rows[r, POINT], rows[r, POINT + 1], rows[r, POINT + 2]
+            normal[w, 0], normal[w, 1], normal[w, 2] = (rows[r, NORMAL_COL], rows[r, NORMAL_COL + 1],
+                                                        rows[r, NORMAL_COL + 2])
+            depth[w] = rows[r, DEPTH]
+            w += 1
+    return a, b, point, normal, depth, key
+
+
+@njit(cache=True)
+def detect_arrays(kind, dims, is_static, reach, pos, quat, margin, cap):
+    """(a, b, point, normal, depth, key) of every contact with depth > -margin,
+    sorted by key, and the number of rows computed; `cap` is a first guess
+    of that number."""
+    pairs = candidate_pairs(kind, dims, is_static, reach, pos, quat, margin)
+    rows, row_pair, k = narrow_rows(pairs, kind, dims, pos, quat, margin, cap)
+    return manifold_arrays(rows, row_pair, k, pairs, margin, len(kind)), k
+
+
+class Detector:
+    """Collision detection for one model (a Model is frozen): the shape data
+    packed once (geometry.py), then one compiled call per `detect`."""
+
+    def __init__(self, model):
+        self.geometry = Geometry.from_model(model)
+        self.n = model.n
+        self._cap = 16      # rows computed by the last call: the next call's first buffer size
+
+    def detect(self, pos, quat, margin: float = 0.0) -> Manifold:
+        """manifold.detect(model, pos, quat, margin), compiled (same contract, same rows)."""
+        g = self.geometry
+        pos = np.ascontiguousarray(pos, dtype=np.float64)
+        quat = np.ascontiguousarray(quat, dtype=np.float64)
+        (a, b, point, normal, depth, key), k = detect_arrays(g.kind, g.dims, g.is_static, g.reach,
+                                                             pos, quat, float(margin), self._cap)
+        self._cap = k + k // 8 + MAX_ROWS_PER_PAIR
+        return Manifold(a=a, b=b, point=point, normal=normal, depth=depth, key=key)
+
+
+# ---- one pair's signed depth, for other compiled code ---------------------------------
+
+@njit(cache=True)
+def depth_scratch():
+    """Scratch for signed_depth: (box workspace, kinds (2,), dims (2, 8),
+    positions (2, 3), orientations (2, 4), rows)."""
+    return (workspace(), np.zeros(2, np.int64), np.zeros((2, 8)), np.zeros((2, 3)), np.zeros((2, 4)),
+            np.zeros((MAX_ROWS_PER_PAIR, ROW)))
+
+
+@njit(cache=True)
+def signed_depth(i, j, kind, dims, pa, qa, pb, qb, scratch):
+    """How far bodies i and j overlap at poses (pa, qa), (pb, qb): > 0
+    overlapping, <= 0 apart (narrowphase.signed_depth). The sign is exact;
+    for separated boxes the magnitude is a lower bound of the gap (the
+    largest separating-axis distance); -inf for a pair no kernel handles."""
+    ws, k2, d2, p2, q2, rows = scratch
+    k2[0], k2[1] = kind[i], kind[j]
+    d2[0], d2[1] = dims[i], dims[j]
+    p2[0], p2[1] = pa, pb
+    q2[0], q2[1] = qa, qb
+    if kind[i] == BOX and kind[j] == BOX:
+        return -separation(0, 1, d2, p2, q2, ws)
+    count = pair_rows(0, 1, k2, d2, p2, q2, np.inf, ws, rows, 0)
+    out = -np.inf
+    for r in range(count):      # np.maximum: a NaN depth gives NaN
+        d = rows[r, DEPTH]
+        out = d if (d != d or d > out) else out
+    return out
+
+
+@njit(cache=True)
+def signed_depths(kind, dims, a, b, pa, qa, pb, qb):
+    """(k,) signed_depth of pairs (a[r], b[r]) at the poses of row r."""
+    scratch = depth_scratch()
+    out = np.empty(len(a))
+    for r in range(len(a)):
+        out[r] = signed_depth(a[r], b[r], kind, dims, pa[r], qa[r], pb[r], qb[r], scratch)
+    return out

@@ -1,0 +1,432 @@
+"""Compiled broad phase: the pairs of bodies that may touch (COURSE.md 5:
+the cheap first half of detecting a collision; the narrow phase decides).
+
+`candidate_pairs(kind, dims, is_static, reach, pos, quat, margin)` gives
+the pairs broadphase.candidate_pairs gives, in the Manifold order (static
+body, else the lower index, as `a`; static–static pairs never appear),
+sorted by pair id min(a, b) n + max(a, b):
+
+- solid pairs need overlapping margin-grown AABBs and bounding spheres
+  (|c_a - c_b| <= R_a + R_b + margin), tested with broadphase._filter's
+  operations in its order, so every pair gets the same yes or no;
+- candidates come from a dense uniform grid over the AABB centres, filled
+  by counting sort. The cell edge is the largest extent among the "small"
+  bodies (<= SMALL_FACTOR × the median), so two small bodies that overlap
+  sit in the same or adjacent cells; each cell is compared with itself and
+  its 13 forward neighbours, which meets every pair once. A scene far wider
+  than its bodies (more than DENSE_CELLS_PER_BODY cells per body) indexes
+  its occupied cells by sorted keys instead of a dense table;
+- the other, "large" bodies (a long slab) are swept along the axis where
+  the boxes spread most against the small bodies and each other, so a pile
+  never costs O(n²);
+- planes skip the grid: each dynamic body is tested against each plane by
+  its lowest point along the normal, with the numpy version's arithmetic
+  (its matmul's fused multiply-adds, `plane_height`).
+
+Hot loops store pairs themselves and call only scalar helpers: a numba
+call that takes arrays and branches keeps reference-count updates that
+cost more than the test itself.
+"""
+import math
+
+import numpy as np
+from numba import njit
+
+from .broadphase import MAX_CELLS, SMALL_FACTOR
+from .geometry import (BOX, HALF, NORMAL, OFFSET, PLANE, RADIUS, SPHERE, dot_lanes, dot_seq, fma,
+                       quat_matrix)
+
+DENSE_CELLS_PER_BODY = 16   # up to this many cells per body (+ DENSE_SPARE), a dense cell table
+DENSE_SPARE = 4096
+CELL_SLACK = 1e-9           # the cell edge grows by this much (relative) and by a few ulps of the
+                            # coordinates, so rounding never puts touching bodies two cells apart
+LO, HI, CEN, REACH = 0, 3, 6, 9   # columns of the solid table: AABB lo, hi, centre, bounding radius
+COLS = 10
+
+
+@njit(cache=True)
+def box_half_extent(quat, dims, b):
+    """World AABB half sizes |R| h of box b (broadphase.aabb_half_extents)."""
+    R = quat_matrix(quat[b, 0], quat[b, 1], quat[b, 2], quat[b, 3])
+    h0, h1, h2 = dims[b, HALF], dims[b, HALF + 1], dims[b, HALF + 2]
+    return (dot_lanes(abs(R[0]), abs(R[1]), abs(R[2]), h0, h1, h2),
+            dot_lanes(abs(R[3]), abs(R[4]), abs(R[5]), h0, h1, h2),
+            dot_lanes(abs(R[6]), abs(R[7]), abs(R[8]), h0, h1, h2))
+
+
+@njit(cache=True)
+def solid_table(kind, dims, reach, pos, quat, margin, solid):
+    """(m, COLS) margin-grown AABB, centre and bounding radius of each solid
+    (non-plane) body (broadphase.solid_columns)."""
+    grow = 0.5 * margin
+    cols = np.empty((len(solid), COLS))
+    for r in range(len(solid)):
+        b = solid[r]
+        rad = dims[b, RADIUS]
+        half = box_half_extent(quat, dims, b) if kind[b] == BOX else (rad, rad, rad)
+        for a in range(3):
+            h = half[a] + grow
+            cols[r, LO + a] = pos[b, a] - h
+            cols[r, HI + a] = pos[b, a] + h
+            cols[r, CEN + a] = pos[b, a]
+        cols[r, REACH] = reach[b] + grow
+    return cols
+
+
+@njit(cache=True)
+def overlaps(cols, p, q):
+    """Rows p, q pass broadphase._filter: bounding spheres, then boxes (touching counts)."""
+    d = cols[p, CEN] - cols[q, CEN]
+    d2 = d * d
+    d = cols[p, CEN + 1] - cols[q, CEN + 1]
+    d2 += d * d
+    d = cols[p, CEN + 2] - cols[q, CEN + 2]
+    d2 += d * d
+    r = cols[p, REACH] + cols[q, REACH]
+    # `&`, not `and`: numba lowers an `and` chain over array reads to many
+    # blocks that cost several times the comparisons
+    ok = d2 <= r * r
+    for a in range(3):
+        ok &= (cols[p, LO + a] <= cols[q, HI + a]) & (cols[q, LO + a] <= cols[p, HI + a])
+    return ok
+
+
+# ---- the pair list: (a, b) rows in Manifold order, grown by doubling -------------------
+
+@njit(cache=True)
+def reserve(pairs, need):
+    """`pairs` with room for `need` rows: the same array, or a copy at least twice as long."""
+    out = pairs
+    if need > len(pairs):
+        out = np.empty((max(need, 2 * len(pairs)), 2), np.int64)
+        out[:len(pairs)] = pairs
+    return out
+
+
+@njit(cache=True)
+def manifold_order(i, j, static_i, static_j):
+    """(a, b, keep) for bodies i, j: a static body first, else the lower
+    index; keep is 0 for a static–static pair (never reported)."""
+    lo, hi, static_lo, static_hi = (i, j, static_i, static_j) if i < j else (j, i, static_j, static_i)
+    if static_hi and not static_lo:
+        lo, hi = hi, lo
+    return lo, hi, 0 if (static_i and static_j) else 1
+
+
+@njit(cache=True)
+def sort_pairs(pairs, k, n):
+    """Rows 0..k of `pairs` sorted by pair id min n + max: a counting sort on
+    the lower index, then insertion sort within each (short) run."""
+    start = np.zeros(n + 2, np.int64)
+    for r in range(k):
+        start[min(pairs[r, 0], pairs[r, 1]) + 2] += 1
+    for i in range(n + 1):
+        start[i + 1] += start[i]
+    out = np.empty((k, 2), np.int64)
+    for r in range(k):
+        lo = min(pairs[r, 0], pairs[r, 1])
+        at = start[lo + 1]
+        start[lo + 1] += 1
+        out[at, 0], out[at, 1] = pairs[r, 0], pairs[r, 1]
+    for lo in range(n):
+        _sort_run(out, start[lo], start[lo + 1])
+    return out
+
+
+@njit(cache=True)
+def _sort_run(out, s, e):
+    """Insertion sort of rows s..e (one lower index) by the higher index."""
+    for r in range(s + 1, e):
+        a, b = out[r, 0], out[r, 1]
+        key = max(a, b)
+        t = r - 1
+        while t >= s and max(out[t, 0], out[t, 1]) > key:
+            out[t + 1, 0], out[t + 1, 1] = out[t, 0], out[t, 1]
+            t -= 1
+        out[t + 1, 0], out[t + 1, 1] = a, b
+
+
+# ---- the grid ---------------------------------------------------------------------------
+
+@njit(cache=True)
+def _classify(cols):
+    """(small rows, large rows, cell edge): small bodies are at most
+    SMALL_FACTOR × the median AABB extent; the cell is the largest small extent."""
+    m = len(cols)
+    size = np.empty(m)
+    for r in range(m):
+        size[r] = max(cols[r, HI] - cols[r, LO], cols[r, HI + 1] - cols[r, LO + 1],
+                      cols[r, HI + 2] - cols[r, LO + 2])
+    limit = SMALL_FACTOR * np.median(size)
+    small = np.flatnonzero(size <= limit)
+    large = np.flatnonzero(~(size <= limit))
+    cell = 0.0
+    for r in small:
+        cell = max(cell, size[r])
+    return small, large, cell
+
+
+@njit(cache=True)
+def _cell_edge(cols, rows, cell):
+    """(edge, origin (3,), dims (3,)): the grid cell edge, grown by the slack and
+    coarsened so no axis has more than MAX_CELLS cells; one empty cell of
+    padding on each side so neighbour keys never wrap round an axis."""
+    lo = np.full(3, np.inf)
+    hi = np.full(3, -np.inf)
+    for r in rows:
+        for a in range(3):
+            lo[a] = min(lo[a], cols[r, CEN + a])
+            hi[a] = max(hi[a], cols[r, CEN + a])
+    scale = max(np.abs(lo).max(), np.abs(hi).max())
+    edge = cell * (1.0 + CELL_SLACK) + 8e-16 * scale
+    edge = max(edge, (hi - lo).max() / MAX_CELLS, 1e-300)
+    dims = np.empty(3, np.int64)
+    for a in range(3):
+        dims[a] = int(math.floor((hi[a] - lo[a]) / edge)) + 3
+    return edge, lo, dims
+
+
+@njit(cache=True)
+def _cell_keys(cols, rows, edge, origin, dims):
+    """Linear cell index of each row's centre (x slowest, z fastest)."""
+    keys = np.empty(len(rows), np.int64)
+    for s in range(len(rows)):
+        key = 0
+        for a in range(3):
+            c = int(math.floor((cols[rows[s], CEN + a] - origin[a]) / edge)) + 1
+            key = key * dims[a] + c
+        keys[s] = key
+    return keys
+
+
+@njit(cache=True)
+def forward_offsets(dims):
+    """Key offsets of the 13 neighbour cells after a cell in (x, y, z) order."""
+    out = np.empty(13, np.int64)
+    k = 0
+    for dx in range(-1, 2):
+        for dy in range(-1, 2):
+            for dz in range(-1, 2):
+                if 9 * dx + 3 * dy + dz > 0:       # (dx, dy, dz) after (0, 0, 0), lexicographically
+                    out[k] = (dx * dims[1] + dy) * dims[2] + dz
+                    k += 1
+    return out
+
+
+@njit(cache=True)
+def _dense_index(keys, ncell):
+    """Counting sort of the keys: (order, first) with the rows of cell c at
+    order[first[c]:first[c + 1]], in row order within a cell."""
+    first = np.zeros(ncell + 2, np.int64)
+    for key in keys:
+        first[key + 2] += 1
+    for c in range(ncell + 1):
+        first[c + 1] += first[c]
+    order = np.empty(len(keys), np.int64)
+    for s in range(len(keys)):
+        order[first[keys[s] + 1]] = s
+        first[keys[s] + 1] += 1
+    return order, first
+
+
+@njit(cache=True)
+def _sparse_index(keys):
+    """(order, first, cells): rows sorted by key; the occupied cells' keys,
+    and their rows at order[first[u]:first[u + 1]]."""
+    order = np.argsort(keys, kind="mergesort")
+    cells = np.empty(len(keys), np.int64)
+    first = np.empty(len(keys) + 1, np.int64)
+    u = 0
+    for s in range(len(keys)):
+        key = keys[order[s]]
+        if u == 0 or cells[u - 1] != key:
+            cells[u] = key
+            first[u] = s
+            u += 1
+    first[u] = len(keys)
+    return order, first[:u + 1], cells[:u]
+
+
+@njit(cache=True)
+def _sparse_span(first, cells, key):
+    """[start, end) of cell `key` among the occupied `cells` (sorted keys)."""
+    u = np.searchsorted(cells, key)
+    found = u < len(cells) and cells[u] == key
+    return (first[u], first[u + 1]) if found else (0, 0)
+
+
+@njit(cache=True)
+def _grid_pairs(cols, ids, small, cell, is_static, pairs, k):
+    """Pairs among the small rows: each body against the later bodies of its
+    own cell and every body of its 13 forward neighbour cells."""
+    edge, origin, dims = _cell_edge(cols, small, cell)
+    keys = _cell_keys(cols, small, edge, origin, dims)
+    ncell = dims[0] * dims[1] * dims[2]
+    if ncell <= DENSE_CELLS_PER_BODY * len(small) + DENSE_SPARE:
+        order, first = _dense_index(keys, ncell)
+        cells = np.zeros(0, np.int64)
+    else:
+        order, first, cells = _sparse_index(keys)
+    rows = small[order]                       # rows in cell order: neighbours close in memory
+    body = ids[rows]
+    return _sweep_cells(cols[rows], body, is_static[body], keys[order], first, cells,
+                        forward_offsets(dims), pairs, k)
+
+
+@njit(cache=True)
+def _most_per_cell(first):
+    """The largest number of bodies in one cell."""
+    most = 0
+    for c in range(len(first) - 1):
+        most = max(most, first[c + 1] - first[c])
+    return most
+
+
+@njit(cache=True)
+def _sweep_cells(sc, body, static, key, first, cells, fwd, pairs, k):
+    """The grid's pairs, sorted rows s < t: t later in s's cell, or in one of its
+    13 forward neighbour cells (a dense table `first` when `cells` is empty)."""
+    dense = len(cells) == 0
+    bound = (len(fwd) + 1) * _most_per_cell(first)
+    for s in range(len(body)):
+        if k + bound > len(pairs):
+            pairs = reserve(pairs, k + bound)
+        for c in range(len(fwd) + 1):
+            if c == 0:
+                a, b = s + 1, (first[key[s] + 1] if dense else _sparse_span(first, cells, key[s])[1])
+            elif dense:
+                a, b = first[key[s] + fwd[c - 1]], first[key[s] + fwd[c - 1] + 1]
+            else:
+                a, b = _sparse_span(first, cells, key[s] + fwd[c - 1])
+            for t in range(a, b):
+                if overlaps(sc, s, t):
+                    i, j, keep = manifold_order(body[s], body[t], static[s], static[t])
+                    pairs[k, 0], pairs[k, 1] = i, j
+                    k += keep
+    return pairs, k
+
+
+# ---- large bodies: sort and sweep -------------------------------------------------------
+
+@njit(cache=True)
+def _sweep_axis(cols):
+    """The axis along which the AABB centres spread most (largest variance)."""
+    best, axis = -1.0, 0
+    for a in range(3):
+        v = np.var(cols[:, LO + a] + cols[:, HI + a])
+        if v > best:
+            best, axis = v, a
+    return axis
+
+
+@njit(cache=True)
+def _large_pairs(cols, ids, large, small, cell, is_static, pairs, k):
+    """Large rows against the small rows whose lower bound lies in
+    [lo - cell, hi] along the sweep axis (a small body overlapping [lo, hi]
+    starts there), and against each other (j after i in lower-bound order
+    overlaps i on that axis iff lo_j <= hi_i)."""
+    axis = _sweep_axis(cols)
+    reach = cell * (1.0 + CELL_SLACK) + 8e-16 * np.abs(cols[:, LO + axis]).max()
+    sweep = cols[small, LO + axis]
+    order = np.argsort(sweep, kind="mergesort")
+    sweep, by_lo = sweep[order], small[order]
+    for r in large:
+        a = np.searchsorted(sweep, cols[r, LO + axis] - reach, side="left")
+        b = np.searchsorted(sweep, cols[r, HI + axis], side="right")
+        pairs = reserve(pairs, k + b - a)
+        k = _test_rows(cols, ids, is_static, r, by_lo[a:b], pairs, k)
+    big = large[np.argsort(cols[large, LO + axis], kind="mergesort")]
+    for s in range(len(big)):
+        t = s + 1
+        while t < len(big) and cols[big[t], LO + axis] <= cols[big[s], HI + axis]:
+            t += 1
+        pairs = reserve(pairs, k + t - s - 1)
+        k = _test_rows(cols, ids, is_static, big[s], big[s + 1:t], pairs, k)
+    return pairs, k
+
+
+@njit(cache=True)
+def _test_rows(cols, ids, is_static, r, others, pairs, k):
+    """Row r against each of `others`; the pairs that pass are stored from k on."""
+    for t in others:
+        if overlaps(cols, r, t):
+            i, j, keep = manifold_order(ids[r], ids[t], is_static[ids[r]], is_static[ids[t]])
+            pairs[k, 0], pairs[k, 1] = i, j
+            k += keep
+    return k
+
+
+# ---- planes -------------------------------------------------------------------------------
+
+@njit(cache=True)
+def plane_height(x0, x1, x2, n0, n1, n2, mode):
+    """n·x as numpy's `pos @ n.T` computes it here (OpenBLAS): mode 0 a plain
+    sum (one body, one plane: a dot product), 1 the fused chain from the y
+    term (gemv: one body or one plane), 2 the fused chain in order (gemm)."""
+    if mode == 0:
+        return dot_seq(x0, x1, x2, n0, n1, n2)
+    if mode == 1:
+        return fma(x2, n2, fma(x0, n0, x1 * n1))
+    return fma(x2, n2, fma(x1, n1, x0 * n0))
+
+
+@njit(cache=True)
+def box_support(w, x, y, z, h0, h1, h2, n0, n1, n2):
+    """How far a box reaches from its centre along unit n: Σ_j h_j |n·axis_j|
+    (broadphase.support_along's einsum orders)."""
+    R = quat_matrix(w, x, y, z)
+    p0 = abs(dot_seq(R[0], R[3], R[6], n0, n1, n2))
+    p1 = abs(dot_seq(R[1], R[4], R[7], n0, n1, n2))
+    p2 = abs(dot_seq(R[2], R[5], R[8], n0, n1, n2))
+    return dot_lanes(p0, p1, p2, h0, h1, h2)
+
+
+@njit(cache=True)
+def _plane_gaps(kind, dims, pos, quat, p, bodies, mode, gaps):
+    """gaps[r]: height of body r's lowest point above plane p (n·x = offset)."""
+    n0, n1, n2 = dims[p, NORMAL], dims[p, NORMAL + 1], dims[p, NORMAL + 2]
+    for r in range(len(bodies)):
+        b = bodies[r]
+        height = plane_height(pos[b, 0], pos[b, 1], pos[b, 2], n0, n1, n2, mode) - dims[p, OFFSET]
+        low = dims[b, RADIUS]
+        if kind[b] == BOX:
+            low = box_support(quat[b, 0], quat[b, 1], quat[b, 2], quat[b, 3],
+                              dims[b, HALF], dims[b, HALF + 1], dims[b, HALF + 2], n0, n1, n2)
+        gaps[r] = height - low
+
+
+@njit(cache=True)
+def _plane_pairs(kind, dims, is_static, pos, quat, margin, pairs, k):
+    """(plane, body) for each dynamic body whose lowest point lies less than
+    `margin` above the plane n·x = offset (solid below)."""
+    planes = np.flatnonzero(kind == PLANE)
+    bodies = np.flatnonzero(~is_static & (kind != PLANE))
+    mode = 1 if (len(planes) == 1 or len(bodies) == 1) else 2
+    if len(planes) == 1 and len(bodies) == 1:
+        mode = 0
+    pairs = reserve(pairs, k + len(planes) * len(bodies))
+    gaps = np.empty(len(bodies))
+    for p in planes:
+        _plane_gaps(kind, dims, pos, quat, p, bodies, mode, gaps)
+        for r in range(len(bodies)):
+            if gaps[r] < margin:
+                pairs[k, 0], pairs[k, 1] = p, bodies[r]
+                k += 1
+    return pairs, k
+
+
+@njit(cache=True)
+def candidate_pairs(kind, dims, is_static, reach, pos, quat, margin):
+    """(k, 2) int64 pairs (a, b) in Manifold order, sorted by pair id."""
+    solid = np.flatnonzero(kind != PLANE)
+    pairs = np.empty((max(16, 4 * len(kind)), 2), np.int64)
+    k = 0
+    if len(solid) >= 2:
+        cols = solid_table(kind, dims, reach, pos, quat, margin, solid)
+        small, large, cell = _classify(cols)
+        if len(small) >= 2:
+            pairs, k = _grid_pairs(cols, solid, small, cell, is_static, pairs, k)
+        if len(large):
+            pairs, k = _large_pairs(cols, solid, large, small, cell, is_static, pairs, k)
+    pairs, k = _plane_pairs(kind, dims, is_static, pos, quat, margin, pairs, k)
+    return sort_pairs(pairs, k, len(kind))

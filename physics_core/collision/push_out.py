@@ -1,0 +1,131 @@
+"""The correct stage, compiled: positions follow the solved velocities, and
+overlap beyond `slop` is pushed out by pseudo-velocities (split impulse).
+
+The integrator moved every body with its unconstrained velocity u0; the
+solve changed it to v, so the body is moved on by (v − u0) h, the pose the
+integrator would have given with v (COURSE.md 4). A bounce acts from its
+time of impact τ h on (bounce.py): the change then counts for the rest of
+the substep only, (1 − τ) h. A body the ccd stage moved back to its time of
+impact t moves from there with its solved velocity for the rest, (1 − t) h.
+
+What overlap is left beyond `slop` is removed at `correction_rate` per
+substep, at most `max_correction_speed`, by pseudo-velocities that move
+positions and are then thrown away, so pushing bodies apart adds no kinetic
+energy. Only translation: a push-out that also turned the bodies would tilt
+a box out of the floor whenever one corner's push is larger than another's.
+"""
+import numpy as np
+from numba import njit
+
+from ..kernel_math import turn_quaternion
+from .contact_layout import (ARM_A, ARM_B, BODY_A, BODY_B, DEPTH, DIR, INV_MASS_A, INV_MASS_B)
+
+
+@njit(cache=True)
+def velocity_changes(vel, omega, vel0, omega0, I, target, tau, toi):
+    """(n, 6) the rate each body still moves at over h beyond the integrator's
+    motion: what the solve changed, over the part of the substep it acts on;
+    a body moved back to its time of impact toi (≥ 0) moves with its solved
+    velocity over the rest of the substep, (1 − toi) h."""
+    n = len(vel)
+    dV = np.empty((n, 6))
+    for i in range(n):
+        for j in range(3):
+            dV[i, j] = vel[i, j] - vel0[i, j]
+            dV[i, 3 + j] = omega[i, j] - omega0[i, j]
+    after = np.full(n, -1.0)
+    for c in range(len(target)):
+        if target[c] > 0.0:
+            for body in (I[c, BODY_A], I[c, BODY_B]):
+                after[body] = max(after[body], 1.0 - tau[c])
+    for i in range(n):
+        if toi[i] >= 0.0:
+            for j in range(3):
+                dV[i, j] = vel[i, j] * (1.0 - toi[i])
+                dV[i, 3 + j] = omega[i, j] * (1.0 - toi[i])
+        elif after[i] >= 0.0:
+            for j in range(6):
+                dV[i, j] *= after[i]
+    return dV
+
+
+@njit(cache=True)
+def separations(R, I, dV, h, out):
+    """Separation of each contact after moving by dV h: n·Δ(x_b − x_a) − depth."""
+    for c in range(len(R)):
+        a, b = I[c, BODY_A], I[c, BODY_B]
+        s = 0.0
+        for i in range(3):
+            s += (R[c, DIR + i] * (dV[b, i] - dV[a, i])
+                  + R[c, ARM_B + i] * dV[b, 3 + i] - R[c, ARM_A + i] * dV[a, 3 + i])
+        out[c] = s * h - R[c, DEPTH]
+
+
+@njit(cache=True)
+def push_targets(sep, slop, rate, max_speed, h, target):
+    """Pseudo-velocity each contact asks for; returns how many ask."""
+    count = 0
+    for c in range(len(sep)):
+        target[c] = 0.0
+        if sep[c] < -slop:
+            target[c] = max(min(rate * (-sep[c] - slop) / h, max_speed), 0.0)
+            if target[c] > 0.0:
+                count += 1
+    return count
+
+
+@njit(cache=True)
+def solve_pseudo(R, I, target, iterations, n):
+    """(n, 3) pseudo-velocities of the centres: normal rows pushed apart to
+    `target`, from zero. Only rows of bodies that some row must push take
+    part (with every other row of those bodies, so a push does not drive
+    them into a neighbour)."""
+    pushed = np.zeros(n, np.bool_)
+    for c in range(len(R)):
+        if target[c] > 0.0:
+            pushed[I[c, BODY_A]] = True
+            pushed[I[c, BODY_B]] = True
+    X = np.zeros((n, 3))
+    lam = np.zeros(len(R))
+    for _ in range(iterations):
+        for c in range(len(R)):
+            a, b = I[c, BODY_A], I[c, BODY_B]
+            if not (pushed[a] or pushed[b]):
+                continue
+            ima, imb = R[c, INV_MASS_A], R[c, INV_MASS_B]
+            un = 0.0
+            for i in range(3):
+                un += R[c, DIR + i] * (X[b, i] - X[a, i])
+            new = max(lam[c] - (un - target[c]) / max(ima + imb, 1e-300), 0.0)
+            d = new - lam[c]
+            lam[c] = new
+            for i in range(3):
+                X[a, i] -= ima * R[c, DIR + i] * d
+                X[b, i] += imb * R[c, DIR + i] * d
+    return X
+
+
+@njit(cache=True)
+def move_bodies(pos, quat, dV, X, h):
+    """x += (Δv + pseudo-velocity) h; q turned by Δω h where Δω ≠ 0."""
+    for i in range(len(pos)):
+        for j in range(3):
+            pos[i, j] += (dV[i, j] + X[i, j]) * h if X.shape[0] else dV[i, j] * h
+        if dV[i, 3] != 0.0 or dV[i, 4] != 0.0 or dV[i, 5] != 0.0:
+            turn_quaternion(quat[i], dV[i, 3], dV[i, 4], dV[i, 5], h, quat[i])
+
+
+@njit(cache=True)
+def correct(R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, h, slop, rate,
+            max_speed, iterations):
+    """The whole correct stage (see the module docstring)."""
+    dV = velocity_changes(vel, omega, vel0, omega0, I, target, tau, toi)
+    k = len(R)
+    sep = np.empty(k)
+    separations(R, I, dV, h, sep)
+    push = np.empty(k)
+    X = np.zeros((0, 3))
+    if iterations > 0 and rate > 0.0 and max_speed > 0.0 and push_targets(sep, slop, rate,
+                                                                            max_speed, h, push):
+        X = solve_pseudo(R, I, push, iterations, len(pos))
+    move_bodies(pos, quat, dV, X, h)

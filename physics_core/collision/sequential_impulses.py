@@ -1,0 +1,143 @@
+"""Sequential impulses over the contact rows, compiled (COURSE.md 5; Box2D's solver).
+
+Each contact keeps its accumulated impulses λ (normal, two tangents). An
+update computes the change that brings the row's relative velocity to its
+target, adds it to λ, clamps λ (normal ≥ 0, tangential inside the friction
+cap) and applies only the clamped change. Contacts are visited one after the
+other in key order (Gauss–Seidel), so every update sees the velocities the
+previous ones left: the order is fixed, hence the result deterministic. The
+accumulated, clamped λ makes many simultaneous contacts converge and lets
+last substep's λ be applied first (warm starting).
+
+Friction is one 2-D impulse in the tangent plane, solved with the tangent
+block W_tt (friction.py): the impulse that stops the slip, corrected for the
+velocity the normal change of the same update gives (W_tn), capped at
+μ λ_n. Over the cap, a sliding contact (kinetic, μ_k) takes μ_k λ_n against
+its slip velocity (the course's μ_k j along −t); a sticking one keeps the
+direction of the impulse that would stop it (the static bound μ_s λ_n).
+"""
+import math
+
+from numba import njit
+
+from .contact_build import row_velocity
+from .contact_layout import (BIAS, BODY_A, BODY_B, DIR, G_TN, INV_MASS_A, INV_MASS_B, LAM, MASS_N,
+                             MU, SLIDING, TURN_A, TURN_B, W_TN, W_TT_INV)
+
+_TINY = 1e-300
+
+
+@njit(cache=True)
+def apply_impulse(R, c, r, lam, a, b, vel, omega):
+    """Velocity change of both bodies for an impulse lam along row r."""
+    ima, imb = R[c, INV_MASS_A] * lam, R[c, INV_MASS_B] * lam
+    for i in range(3):
+        d = R[c, DIR + 3 * r + i]
+        vel[a, i] -= ima * d
+        omega[a, i] -= lam * R[c, TURN_A + 3 * r + i]
+        vel[b, i] += imb * d
+        omega[b, i] += lam * R[c, TURN_B + 3 * r + i]
+
+
+@njit(cache=True)
+def warm_start(R, I, vel, omega):
+    """Apply the impulses λ the rows start with (loaded from last substep)."""
+    for c in range(len(R)):
+        a, b = I[c, BODY_A], I[c, BODY_B]
+        for r in range(3):
+            if R[c, LAM + r] != 0.0:
+                apply_impulse(R, c, r, R[c, LAM + r], a, b, vel, omega)
+
+
+@njit(cache=True)
+def friction_cap(R, c, lt1, lt2, ln, v1, v2, sliding):
+    """Coulomb's bound |λ_t| ≤ μ λ_n (friction.cap), for one contact."""
+    lim = R[c, MU] * ln
+    mag2 = lt1 * lt1 + lt2 * lt2
+    if not mag2 > lim * lim:
+        return lt1, lt2
+    if sliding:
+        scale = lim / math.sqrt(v1 * v1 + v2 * v2 + _TINY)
+        return -v1 * scale, -v2 * scale
+    scale = lim / math.sqrt(mag2 + _TINY)
+    return lt1 * scale, lt2 * scale
+
+
+@njit(cache=True)
+def update_contact(R, I, c, vel, omega):
+    """One Gauss–Seidel update of contact c; returns its largest impulse change."""
+    a, b = I[c, BODY_A], I[c, BODY_B]
+    un = row_velocity(R, c, 0, a, b, vel, omega)
+    u1 = row_velocity(R, c, 1, a, b, vel, omega)
+    u2 = row_velocity(R, c, 2, a, b, vel, omega)
+    old_n, old_1, old_2 = R[c, LAM], R[c, LAM + 1], R[c, LAM + 2]
+    ln = max(old_n - R[c, MASS_N] * (un - R[c, BIAS]), 0.0)
+    dn = ln - old_n
+    # W_tt⁻¹ u_t: the tangential impulse that stops the slip; friction sees
+    # the velocity after this normal change (W_tn couples them)
+    s1 = R[c, W_TT_INV] * u1 + R[c, W_TT_INV + 1] * u2
+    s2 = R[c, W_TT_INV + 2] * u1 + R[c, W_TT_INV + 3] * u2
+    lt1 = old_1 - s1 - R[c, G_TN] * dn
+    lt2 = old_2 - s2 - R[c, G_TN + 1] * dn
+    v1 = u1 + R[c, W_TN] * dn
+    v2 = u2 + R[c, W_TN + 1] * dn
+    lt1, lt2 = friction_cap(R, c, lt1, lt2, ln, v1, v2, I[c, SLIDING] != 0)
+    R[c, LAM], R[c, LAM + 1], R[c, LAM + 2] = ln, lt1, lt2
+    apply_impulse(R, c, 0, dn, a, b, vel, omega)
+    apply_impulse(R, c, 1, lt1 - old_1, a, b, vel, omega)
+    apply_impulse(R, c, 2, lt2 - old_2, a, b, vel, omega)
+    return max(abs(dn), max(abs(lt1 - old_1), abs(lt2 - old_2)))
+
+
+@njit(cache=True)
+def solve_velocities(R, I, vel, omega, iterations, limit):
+    """At most `iterations` sweeps over every contact; stops after a sweep
+    that changed no impulse by more than `limit` (N·s; < 0: never). A NaN
+    change never stops early. Returns the number of sweeps done."""
+    for sweep in range(iterations):
+        change = 0.0
+        for c in range(len(R)):
+            d = update_contact(R, I, c, vel, omega)
+            if not d < change:
+                change = d
+        if limit > 0.0 and change < limit:
+            return sweep + 1
+    return iterations
+
+
+@njit(cache=True)
+def solve_normal_targets(R, I, target, vel, omega):
+    """One sweep of the normal rows with target[c] > 0 towards u_n = target:
+    the restitution pass. λ_n keeps accumulating on the solve's, still ≥ 0,
+    so a bounce only ever pushes (Box2D's restitution stage)."""
+    for c in range(len(R)):
+        if not target[c] > 0.0:
+            continue
+        a, b = I[c, BODY_A], I[c, BODY_B]
+        un = row_velocity(R, c, 0, a, b, vel, omega)
+        old = R[c, LAM]
+        ln = max(old - R[c, MASS_N] * (un - target[c]), 0.0)
+        R[c, LAM] = ln
+        apply_impulse(R, c, 0, ln - old, a, b, vel, omega)
+
+
+@njit(cache=True)
+def friction_and_slip(R, I, vel, omega, friction, slip):
+    """Per contact: the tangential impulse as a world vector λ_t1 t1 + λ_t2 t2
+    (it survives a change of tangent basis) and the slip speed |u_t| now."""
+    for c in range(len(R)):
+        a, b = I[c, BODY_A], I[c, BODY_B]
+        for i in range(3):
+            friction[c, i] = R[c, LAM + 1] * R[c, DIR + 3 + i] + R[c, LAM + 2] * R[c, DIR + 6 + i]
+        u1 = row_velocity(R, c, 1, a, b, vel, omega)
+        u2 = row_velocity(R, c, 2, a, b, vel, omega)
+        slip[c] = math.sqrt(u1 * u1 + u2 * u2)
+
+
+@njit(cache=True)
+def least_mass(R):
+    m = math.inf
+    for c in range(len(R)):
+        m = min(m, R[c, MASS_N])
+    return m
+

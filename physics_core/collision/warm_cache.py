@@ -1,0 +1,86 @@
+"""Warm starting: a contact starts each substep with last substep's impulses.
+
+Matched by Manifold key (pair and feature), both lists in ascending key
+order, by one merge pass. The normal impulse is reused as it was; the
+friction impulse is kept as a world vector and projected on the new tangent
+basis, so it survives a change of basis. The contact's slip speed after the
+solve is kept too: it decides static or kinetic friction next substep
+(COURSE.md 5: held while slipping slower than `static_friction_speed`, μ_s;
+sliding with μ_k otherwise; a new contact starts held). The restitution
+pass's extra push is not kept: it belongs to one impact, not to the load.
+"""
+import numpy as np
+from numba import njit
+
+from .contact_layout import DIR, LAM, MU, MU_K, MU_S, SLIDING
+
+
+@njit(cache=True)
+def load_warm(R, I, key, old_key, old, fraction, static_speed):
+    """λ of the rows whose key was seen last substep (× fraction), and each
+    row's friction regime from its last slip speed. old (m, 5): normal
+    impulse, friction impulse (world vector), slip speed per old key."""
+    j = 0
+    m = len(old_key)
+    for c in range(len(key)):
+        while j < m and old_key[j] < key[c]:
+            j += 1
+        slip = np.nan
+        if j < m and old_key[j] == key[c]:
+            slip = old[j, 4]
+            if fraction > 0.0:
+                f0, f1, f2 = old[j, 1], old[j, 2], old[j, 3]
+                R[c, LAM] = old[j, 0] * fraction
+                R[c, LAM + 1] = (f0 * R[c, DIR + 3] + f1 * R[c, DIR + 4] + f2 * R[c, DIR + 5]) * fraction
+                R[c, LAM + 2] = (f0 * R[c, DIR + 6] + f1 * R[c, DIR + 7] + f2 * R[c, DIR + 8]) * fraction
+        sliding = slip > static_speed      # NaN (a new contact): held
+        I[c, SLIDING] = 1 if sliding else 0
+        R[c, MU] = R[c, MU_K] if sliding else R[c, MU_S]
+
+
+@njit(cache=True)
+def warm_load(R, I, key, cache_keys, cache_values, fraction, static_speed):
+    load_warm(R, I, key, cache_keys[0], cache_values[0], fraction, static_speed)
+
+
+@njit(cache=True)
+def warm_store(cache_keys, cache_values, key, R, friction, slip):
+    """Keep this substep's impulses, friction vectors and slip speeds by key."""
+    values = np.empty((len(key), 5))
+    for c in range(len(key)):
+        values[c, 0] = R[c, LAM]
+        values[c, 1], values[c, 2], values[c, 3] = friction[c, 0], friction[c, 1], friction[c, 2]
+        values[c, 4] = slip[c]
+    cache_keys[0] = key.copy()
+    cache_values[0] = values
+
+
+@njit(cache=True)
+def warm_clear(cache_keys, cache_values):
+    cache_keys[0] = np.zeros(0, np.int64)
+    cache_values[0] = np.zeros((0, 5))
+
+
+@njit(cache=True)
+def remap_keys(key, n_old, n_new, new_index, slots):
+    """Feature keys (manifold.py: (min·n + max)·SLOTS + slot) re-encoded after a
+    change of the body set: new_index[old body] = its new index, -1 if removed.
+    Returns (keys, kept) with kept[i] False for a contact of a removed body.
+    The surviving bodies keep their order, so ascending keys stay ascending."""
+    out = np.empty(len(key), np.int64)
+    kept = np.zeros(len(key), np.bool_)
+    for i in range(len(key)):
+        slot = key[i] % slots
+        pair = key[i] // slots
+        lo, hi = new_index[pair // n_old], new_index[pair % n_old]
+        if lo >= 0 and hi >= 0:
+            out[i] = (min(lo, hi) * n_new + max(lo, hi)) * slots + slot
+            kept[i] = True
+    return out, kept
+
+
+def remap_warm_cache(cache_keys, cache_values, n_old, n_new, new_index, slots):
+    """The cache for the same contacts after a change of the body set."""
+    key, kept = remap_keys(cache_keys[0], n_old, n_new, new_index, slots)
+    cache_keys[0] = np.ascontiguousarray(key[kept])
+    cache_values[0] = np.ascontiguousarray(cache_values[0][kept])

@@ -1,0 +1,39 @@
+"""A clock compiled code can read: the processor's cycle counter.
+
+Numba's nopython mode has no time function, yet every stage of the
+compiled step is timed into `world.profile`. `cycles()` reads the counter
+(LLVM's readcyclecounter: the TSC on x86, a few nanoseconds) and
+`SECONDS_PER_CYCLE` converts, measured once against time.perf_counter.
+Where the processor has no such counter it reads 0 and the profile stays
+empty; the physics does not depend on it.
+"""
+from time import perf_counter
+
+from llvmlite import ir
+from numba import njit, types
+from numba.extending import intrinsic
+
+
+@intrinsic
+def _readcyclecounter(typingctx):
+    def codegen(context, builder, signature, args):
+        fnty = ir.FunctionType(ir.IntType(64), [])
+        fn = builder.module.declare_intrinsic("llvm.readcyclecounter", fnty=fnty)
+        return builder.call(fn, [])
+    return types.int64(), codegen
+
+
+@njit(cache=True)
+def cycles():
+    return _readcyclecounter()
+
+
+def _calibrate(seconds=0.02):
+    c0, t0 = cycles(), perf_counter()
+    while perf_counter() - t0 < seconds:
+        pass
+    c1, t1 = cycles(), perf_counter()
+    return (t1 - t0) / (c1 - c0) if c1 > c0 else 0.0
+
+
+SECONDS_PER_CYCLE = _calibrate()

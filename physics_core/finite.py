@@ -1,0 +1,34 @@
+"""The finite check after every stage: a NaN or inf is caught at the end of
+the stage that made it, never carried into the next (MuJoCo checks its
+state at stage boundaries the same way)."""
+import math
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def _row_finite(a, i):
+    for j in range(a.shape[1]):
+        if not math.isfinite(a[i, j]):
+            return False
+    return True
+
+
+@njit(cache=True)
+def non_finite_bodies(pos, quat, vel, omega):
+    """Indices of the bodies with a NaN or inf in their pose or velocity."""
+    bad = np.zeros(len(pos), np.bool_)
+    count = 0
+    for i in range(len(pos)):
+        if not (_row_finite(pos, i) and _row_finite(vel, i) and _row_finite(omega, i)
+                and _row_finite(quat, i)):
+            bad[i] = True
+            count += 1
+    out = np.empty(count, np.int64)
+    k = 0
+    for i in range(len(pos)):
+        if bad[i]:
+            out[k] = i
+            k += 1
+    return out
