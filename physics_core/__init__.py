@@ -1,10 +1,14 @@
-"""physics_core: a data-oriented rigid-body engine in pure numpy (no ROS here).
+"""physics_core: a data-oriented rigid-body engine compiled with Numba (no ROS here).
 
     from physics_core import load_scene
     world = load_scene("scenes/pile.yaml")
     world.step(100)
 """
 import os
+
+from .kernel_cache import use_source_keyed_cache
+
+use_source_keyed_cache()      # before any kernel is defined (kernel_cache.py)
 
 from .contact_events import BEGIN, END, PERSIST, ContactEvents
 from .errors import CommandError, NonFiniteStateError, PhysicsError, SceneError

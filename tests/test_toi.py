@@ -6,9 +6,11 @@ import numpy as np
 import pytest
 
 from physics_core import quaternion as qt
-from physics_core.collision.narrowphase import signed_depth
-from physics_core.collision.toi import (CCD_TOLERANCE, fast_body_mask, interpolate_poses, slerp,
-                                        swept_pairs, time_of_impact)
+from physics_core.collision.detection import signed_depths
+from physics_core.collision.geometry import Geometry
+from physics_core.collision.time_of_impact import (CCD_TOLERANCE, fast_body_mask,
+                                                   interpolate_poses, swept_pairs, time_of_impact)
+from physics_core.collision.time_of_impact import slerp_rows as slerp
 from physics_core.scene_loader import build_model
 from physics_scenes import box, sphere
 
@@ -42,7 +44,8 @@ def ends(model):
 def depth_at(model, prev_pos, prev_quat, pos, quat, a, b, t):
     pa, qa = interpolate_poses(prev_pos[[a]], prev_quat[[a]], pos[[a]], quat[[a]], [t])
     pb, qb = interpolate_poses(prev_pos[[b]], prev_quat[[b]], pos[[b]], quat[[b]], [t])
-    return signed_depth(model, [a], [b], pa, qa, pb, qb)[0]
+    g = Geometry.from_model(model)
+    return signed_depths(g.kind, g.dims, np.array([a]), np.array([b]), pa, qa, pb, qb)[0]
 
 
 # ---- sphere falling onto a plane ----------------------------------------------

@@ -11,11 +11,13 @@ from numba import njit
 
 from ..cycle_clock import cycles
 from ..finite import non_finite_bodies
-from .contact_data import CCD_ON, SLEEP_ON
+from .contact_data import (CCD_ITERATIONS, CCD_ON, CCD_THRESHOLD, CCD_TOLERANCE, MARGIN,
+                           SLEEP_ON)
 from .contact_layout import LAM, U0
 from .contact_stages import (ccd_stage, correct_stage, detect_stage, restitution_stage,
                              rows_stage, sleep_stage, solve_stage, solver_masses)
 from .event_log import events_add, events_finish, events_reset
+from .time_of_impact import rewind_bodies
 
 CCD, COLLIDE, SOLVE, RESTITUTION, CORRECT, EVENTS, SLEEP, N_STAGES = range(8)
 STAGE_NAMES = ("ccd", "collide", "solve", "restitution", "correct", "events", "sleep")
@@ -79,7 +81,15 @@ def run(cm, fp, ip, s, masses, p0, q0, sleep, warm, events, h, dt, first, last, 
     target, tau = restitution_stage(fp, R, I, vel, omega, h)
     prof[RESTITUTION] += cycles() - t
     t = cycles()
+    rewound = toi >= 0.0
+    if rewound.any():
+        at_impact = (pos.copy(), quat.copy())
     correct_stage(fp, ip, R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, h)
+    if rewound.any():
+        # the rest of the substep of the bodies moved back, searched like the whole
+        rewind_bodies(cm.kind, cm.dims, cm.reach, cm.is_static, rewound, at_impact[0],
+                      at_impact[1], pos, quat, omega, fp[CCD_THRESHOLD], fp[MARGIN],
+                      ip[CCD_ITERATIONS], fp[CCD_TOLERANCE], toi)
     prof[CORRECT] += cycles() - t
     if not _finite(pos, quat, vel, omega):
         return CORRECT

@@ -15,16 +15,20 @@ first, finely enough that the pair cannot pass each other between samples.
 2. Its candidates: every body whose swept box (the bounding box over the
    substep) meets its own, by sort and sweep along x, and every plane its
    lowest point may come within `margin` of.
-3. A pair counts only if it starts the substep apart by more than the
-   contact margin: a pair already touching (a ball rolling on the floor, a
-   box spinning on it) is a discrete contact of the collide stage, not a
-   tunnelling candidate, so it is never rewound.
+3. A pair apart at the start hits where it first touches. A pair already
+   touching (within the contact margin: a ball rolling on the floor, a box
+   spinning on it) is a discrete contact of the collide stage and is never
+   moved back for that; it hits only where it goes deeper than
+   `ccd_threshold` × the thinner body's smallest half size past its start
+   depth, i.e. where it would be crossing the other body.
 4. The earliest time of impact t of each body over its pairs: the body is
    put back at its pose there (positions linear, orientations by slerp),
    with the same body-frame angular velocity (so the same body-frame angular
    momentum I ω_b and rotational energy: a rewind never adds energy). The
    correct stage then moves it with its solved velocity over the rest of
-   the substep, (1 − t) h, so no time is lost.
+   the substep, (1 − t) h, so no time is lost; that motion is searched the
+   same way (the contact at the impact turns the body, and another corner
+   may swing into the wall), and stopped where it would cross.
 """
 import math
 
@@ -142,6 +146,17 @@ def plane_candidates(kind, dims, reach, fast, p0, pos, margin, out_a, out_b):
 
 
 @njit(cache=True)
+def candidate_pairs(kind, dims, reach, is_static, fast, p0, q0, pos, quat, margin):
+    """(a, b) int64 arrays: the solid candidates, then the plane ones."""
+    a, b = solid_candidates(kind, dims, reach, is_static, fast, p0, q0, pos, quat, margin)
+    plane_candidates(kind, dims, reach, fast, p0, pos, margin, a, b)
+    out_a, out_b = np.empty(len(a), np.int64), np.empty(len(a), np.int64)
+    for r in range(len(a)):
+        out_a[r], out_b[r] = a[r], b[r]
+    return out_a, out_b
+
+
+@njit(cache=True)
 def slerp(q0, q1, t, out):
     """Orientation a fraction t of the way from q0 to q1 along the shorter arc,
     at constant angular rate; normalised lerp within 1e-6 rad (no 0/0)."""
@@ -198,22 +213,40 @@ def sample_count(kind, dims, reach, i, j, p0, q0, pos, quat):
 
 
 @njit(cache=True)
-def pair_impact(i, j, kind, dims, reach, p0, q0, pos, quat, margin, iterations, tolerance,
-                poses, scratch):
-    """Fraction t of the substep where the pair first touches (the last time
-    found apart), or -1: no hit, or already within `margin` at the start."""
-    if depth_at(i, j, 0.0, kind, dims, p0, q0, pos, quat, poses, scratch) > -margin:
-        return -1.0
+def allowed_depth(i, j, kind, dims, start, margin, threshold):
+    """How deep the pair may go within the substep before it counts as a hit:
+    0 for a pair apart at the start; for one already touching (within the
+    contact margin: a ball rolling on the floor, a box resting or spinning
+    on it), the discrete contact holds it, unless the body moves deeper than
+    `threshold` × the thinner body's smallest half size past where it
+    started: then it is crossing the other and is stopped there (a plane is
+    a half-space, which cannot be crossed)."""
+    if start <= -margin:
+        return 0.0
+    if kind[i] == PLANE or kind[j] == PLANE:
+        return math.inf       # a half-space cannot be crossed: the contact pushes back out
+    thin = min(smallest_half_size(kind, dims, i), smallest_half_size(kind, dims, j))
+    return max(start, 0.0) + threshold * thin
+
+
+@njit(cache=True)
+def pair_impact(i, j, kind, dims, reach, p0, q0, pos, quat, margin, threshold, iterations,
+                tolerance, poses, scratch):
+    """Fraction t of the substep where the pair first goes deeper than its
+    allowed depth (the last time found within it), or -1: no hit."""
+    limit = allowed_depth(i, j, kind, dims,
+                          depth_at(i, j, 0.0, kind, dims, p0, q0, pos, quat, poses, scratch),
+                          margin, threshold)
     count = sample_count(kind, dims, reach, i, j, p0, q0, pos, quat)
     lo = 0.0
     for s in range(1, count + 1):
         hi = s / count
-        if depth_at(i, j, hi, kind, dims, p0, q0, pos, quat, poses, scratch) > 0.0:
+        if depth_at(i, j, hi, kind, dims, p0, q0, pos, quat, poses, scratch) > limit:
             for _ in range(iterations):
                 if hi - lo < tolerance:
                     break
                 mid = 0.5 * (lo + hi)
-                if depth_at(i, j, mid, kind, dims, p0, q0, pos, quat, poses, scratch) > 0.0:
+                if depth_at(i, j, mid, kind, dims, p0, q0, pos, quat, poses, scratch) > limit:
                     hi = mid
                 else:
                     lo = mid
@@ -245,24 +278,98 @@ def rewind_fast_bodies(kind, dims, reach, is_static, moving, p0, q0, pos, quat, 
     """The ccd stage: toi[i] = time of impact (fraction of the substep) of each
     body moved back, -1 for the others. Returns how many were moved back."""
     fast = fast_bodies(kind, dims, reach, moving, p0, q0, pos, quat, threshold)
+    return rewind_bodies(kind, dims, reach, is_static, fast, p0, q0, pos, quat, omega, threshold,
+                         margin, iterations, tolerance, toi)
+
+
+@njit(cache=True)
+def rewind_bodies(kind, dims, reach, is_static, fast, p0, q0, pos, quat, omega, threshold,
+                  margin, iterations, tolerance, toi):
+    """rewind_fast_bodies for the bodies marked `fast`."""
     toi[:] = -1.0
     if not fast.any():
         return 0
-    a, b = solid_candidates(kind, dims, reach, is_static, fast, p0, q0, pos, quat, margin)
-    plane_candidates(kind, dims, reach, fast, p0, pos, margin, a, b)
+    a, b = candidate_pairs(kind, dims, reach, is_static, fast, p0, q0, pos, quat, margin)
     first = np.full(len(pos), np.inf)
     poses = np.empty((2, 7))
     scratch = depth_scratch()
     for r in range(len(a)):
-        t = pair_impact(a[r], b[r], kind, dims, reach, p0, q0, pos, quat, margin, iterations,
-                        tolerance, poses, scratch)
+        t = pair_impact(a[r], b[r], kind, dims, reach, p0, q0, pos, quat, margin, threshold,
+                        iterations, tolerance, poses, scratch)
         if t >= 0.0:
             first[a[r]] = min(first[a[r]], t)
             first[b[r]] = min(first[b[r]], t)
     count = 0
     for i in range(len(pos)):
-        if moving[i] and first[i] < math.inf:
+        if fast[i] and first[i] < math.inf:
             rewind(i, first[i], p0, q0, pos, quat, omega)
             toi[i] = first[i]
             count += 1
     return count
+
+
+# ---- the same searches from Python, on whole arrays (tests, studies) ----------------------
+
+CCD_TOLERANCE = 1e-4       # contact_params' default ccd_tolerance
+CCD_ITERATIONS = 30
+
+
+def _geometry(model):
+    from .geometry import Geometry
+    return Geometry.from_model(model)
+
+
+def _arrays(*arrays):
+    return [np.ascontiguousarray(a, dtype=np.float64) for a in arrays]
+
+
+def fast_body_mask(model, prev_pos, pos, threshold=0.5, prev_quat=None, quat=None):
+    """(n,) dynamic bodies whose sweep exceeds threshold × their smallest half
+    size; without orientations, translation only."""
+    g = _geometry(model)
+    p0, p1 = _arrays(prev_pos, pos)
+    q0 = np.tile([1.0, 0.0, 0.0, 0.0], (len(p0), 1)) if prev_quat is None else _arrays(prev_quat)[0]
+    q1 = q0 if quat is None else _arrays(quat)[0]
+    return fast_bodies(g.kind, g.dims, g.reach, ~g.is_static, p0, q0, p1, q1, float(threshold))
+
+
+def swept_pairs(model, prev_pos, prev_quat, pos, quat, fast, margin=0.0):
+    """(a, b) candidate pairs of the fast bodies, sorted by pair."""
+    g = _geometry(model)
+    p0, q0, p1, q1 = _arrays(prev_pos, prev_quat, pos, quat)
+    fast = np.ascontiguousarray(fast, dtype=np.bool_)
+    a, b = candidate_pairs(g.kind, g.dims, g.reach, g.is_static, fast, p0, q0, p1, q1,
+                           float(margin))
+    order = np.argsort(np.minimum(a, b) * model.n + np.maximum(a, b), kind="stable")
+    return a[order], b[order]
+
+
+def time_of_impact(model, prev_pos, prev_quat, pos, quat, pairs_a, pairs_b,
+                   iterations=CCD_ITERATIONS, tolerance=CCD_TOLERANCE, margin=0.0, threshold=0.5):
+    """(t, hit) per pair: the fraction of the step where it first touches (the
+    last time found apart; for a pair touching at the start, goes deeper than
+    allowed_depth), 1 where it does not hit."""
+    g = _geometry(model)
+    p0, q0, p1, q1 = _arrays(prev_pos, prev_quat, pos, quat)
+    poses, scratch = np.empty((2, 7)), depth_scratch()
+    t = np.ones(len(pairs_a))
+    for r, (i, j) in enumerate(zip(pairs_a, pairs_b)):
+        t[r] = pair_impact(int(i), int(j), g.kind, g.dims, g.reach, p0, q0, p1, q1, float(margin),
+                           float(threshold), int(iterations), float(tolerance), poses, scratch)
+    hit = t >= 0.0
+    return np.where(hit, t, 1.0), hit
+
+
+def interpolate_poses(prev_pos, prev_quat, pos, quat, t):
+    """Poses at fractions t (k,) of the step, rows matching the inputs."""
+    p0, q0, p1, q1 = _arrays(prev_pos, prev_quat, pos, quat)
+    t = np.asarray(t, dtype=float)
+    return p0 + t[:, None] * (p1 - p0), slerp_rows(q0, q1, t)
+
+
+def slerp_rows(q0, q1, t):
+    """slerp for rows of orientations (k, 4) and fractions (k,)."""
+    out = np.empty((len(q0), 4))
+    for r in range(len(q0)):
+        slerp(q0[r], q1[r], float(t[r]), out[r])
+    return out
