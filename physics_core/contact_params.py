@@ -6,18 +6,14 @@ live in physics_core/collision (see its __init__ for the order).
 """
 from dataclasses import dataclass
 
-SOLVERS = ("gauss_seidel", "jacobi")
 RESTITUTION_COMBINES = ("effective_mass", "mean", "min", "max")
 
 
 @dataclass(frozen=True)
 class ContactParams:
     # -- velocity solver (COURSE.md 5, impulses; Box2D's sequential impulses) --
-    iterations: int = 8                  # velocity-solver sweeps over all contacts per (sub)step
-    solver: str = "gauss_seidel"         # gauss_seidel: graph-coloured batches updated in turn;
-                                         # jacobi: one batch with mass splitting (cheaper, softer stacks)
-    tail_fraction: float = 0.1           # the last graph colours holding at most this fraction of the
-                                         # contacts are solved as one Jacobi batch (0: pure Gauss–Seidel)
+    iterations: int = 8                  # velocity-solver sweeps over all contacts per (sub)step, each
+                                         # visiting the contacts one after the other in key order
     velocity_tolerance: float = 1e-4     # m/s; sweeps stop early once none changes a contact's
                                          # relative velocity by more than this (0: always all sweeps)
     warm_start: float = 1.0              # fraction of last substep's impulses applied first, 0..1
@@ -57,8 +53,6 @@ def parse_contacts(r) -> ContactParams:
     d = ContactParams()
     return ContactParams(
         iterations=r.number("iterations", d.iterations, min=1, max=1000, integer=True),
-        solver=r.string("solver", d.solver, choices=SOLVERS),
-        tail_fraction=r.number("tail_fraction", d.tail_fraction, min=0.0, max=1.0),
         velocity_tolerance=r.number("velocity_tolerance", d.velocity_tolerance, min=0.0),
         warm_start=r.number("warm_start", d.warm_start, min=0.0, max=1.0),
         static_friction_speed=r.number("static_friction_speed", d.static_friction_speed, min=0.0),

@@ -1,33 +1,31 @@
 """The four integrators a scene can pick (COURSE.md 4), advancing one (sub)step h.
 
-State y = (x, q, v, L): position, orientation, velocity and world angular
-momentum L = I_w ω with I_w = R diag(I) Rᵀ. Working with L makes the
-gyroscopic term exact: with no torque L stays constant whatever the
-integrator, and ω = I_w⁻¹ L follows the orientation, which gives the
-intermediate-axis flip of an asymmetric body (COURSE.md 3). Orientation is
-advanced by the exact exponential map of ω h, so it stays a unit quaternion;
-semi-implicit Euler and velocity Verlet advance it by the torque-free
-splitting of free_rotation.py between torque kicks, so that, like their
-translational update, they keep the energy of a free body bounded.
+Each `INTEGRATORS[name](sys, h)` is a thin Python wrapper over the one
+compiled implementation, integration.integrate_substep: explicit and
+semi-implicit Euler evaluate the forces once, velocity Verlet twice, RK4
+four times, all inside the compiled call, with the declared force effects'
+kernels (effects/*.py) and the held loads exactly as World.forces adds them.
+The integrators themselves (state (x, q, v, L), the torque-free splitting,
+the exact orientation map) are described in integrator_kernels.py.
 
-Each integrator calls `sys.forces(x, q, v, ω) -> (F, τ)` as often as its
-order needs (1 for the Euler pair, 2 for velocity Verlet, 4 for RK4).
-When no body spins and nothing can apply torque, the rotational half is
-skipped (`sys.rotating` false). `sys.rotation_rows` (free_rotation.RowSplit)
-names the isotropic bodies: for them I_w = I 1, so L = I ω and ω = L / I
-need no change of frame, and their orientation follows the exact map.
-
-Between force evaluations the update is one compiled loop over bodies
-(Numba, float64, no fast-math, serial, so every run gives the same bits):
-one call after the force evaluation for either Euler, two for Verlet, one
-per stage for RK4. The state arrays are updated in place.
+`sys` is a World (or anything with its attributes): its state arrays are
+updated in place; `sys.model` gives the force constants (integration_data,
+built once per model and sys), `sys.rotation_rows` the isotropic bodies,
+`sys.inv_mass` (n, 1), `sys.inertia` and `sys.inv_inertia` (n, 3) the awake
+bodies' masses. The rotational half runs when integrate_substep finds it
+needed (an effect that can make torque, a held torque, a spinning body),
+or when `sys.rotating` says so if sys sets it. When sys keeps a `_prof`
+dict, each effect's seconds are added to `_prof["force:<name>"]`.
+The World's compiled step (step_loop.py) calls integrate_substep itself.
 """
+import weakref
+
 import numpy as np
-from numba import njit
 
 from . import free_rotation
-from .free_rotation import advance_one, diagonal_one, turn_one
-from .quaternion import derivative_one, normalize_one, row3, row4
+from .cycle_clock import SECONDS_PER_CYCLE
+from .integration import (EFFECT_NAMES, FLAGS, INTEGRATOR_CODES, can_make_torque, integrate_substep,
+                          integration_data, integration_profile, integration_work)
 
 
 def angular_momentum(q, inertia, omega, rows=None):
@@ -48,259 +46,67 @@ def _mask(rows, n):
     return rows.mask if isinstance(rows, free_rotation.RowSplit) else free_rotation.RowSplit(rows).mask
 
 
-def _isotropic(sys):
-    return _mask(getattr(sys, "rotation_rows", None), len(sys.state.pos))
+class _Prepared:
+    """What the wrappers keep per World: the data of its model and rows, the
+    scratch for its body count, and the profile array with the declared
+    effects' keys, and whether an effect can make torque."""
+    __slots__ = ("model", "rows", "n", "data", "work", "prof", "timed", "model_torque")
+
+    def __init__(self, model, rows, n):
+        self.model, self.rows, self.n = model, rows, n
+        self.model_torque = can_make_torque(model)
+        self.data = integration_data(model, isotropic=_mask(rows, n))
+        self.work = integration_work(n)
+        self.prof = integration_profile()
+        flags = self.data[FLAGS]
+        self.timed = [(e, "force:" + name) for e, name in enumerate(EFFECT_NAMES) if flags[e]]
 
 
-# ---- one body's pieces --------------------------------------------------------
-
-@njit(cache=True)
-def _set3(a, i, v):
-    a[i, 0], a[i, 1], a[i, 2] = v
+_PREPARED = weakref.WeakKeyDictionary()
 
 
-@njit(cache=True)
-def _set4(a, i, v):
-    a[i, 0], a[i, 1], a[i, 2], a[i, 3] = v
+def _prepared(sys):
+    """The World's _Prepared, rebuilt when its model, rows or body count changed."""
+    rows, n = getattr(sys, "rotation_rows", None), len(sys.state.pos)
+    p = _PREPARED.get(sys)
+    if p is None or p.model is not sys.model or p.rows is not rows or p.n != n:
+        p = _PREPARED[sys] = _Prepared(sys.model, rows, n)
+    return p
 
 
-@njit(cache=True)
-def _momentum_plus(quat, omega, inertia, iso, i, T, c):
-    """L = I_w ω + c τ for body i (the torque kick of length c)."""
-    L = diagonal_one(row4(quat, i), row3(inertia, i), row3(omega, i), iso[i])
-    return (L[0] + T[i, 0] * c, L[1] + T[i, 1] * c, L[2] + T[i, 2] * c)
-
-
-@njit(cache=True)
-def _plus(a, b, c):
-    """a + c b for two 3-tuples."""
-    return (a[0] + c * b[0], a[1] + c * b[1], a[2] + c * b[2])
-
-
-# ---- explicit and semi-implicit Euler ---------------------------------------------
-
-@njit(cache=True)
-def _explicit_euler_update(pos, quat, vel, omega, F, T, inv_mass, inertia, inv_inertia, iso, h, rotating):
-    """x ← x + v h, v ← v + a h; L ← I_w ω + τ h, q turned by the start-of-step ω."""
-    for i in range(len(pos)):
-        im = inv_mass[i, 0]
-        for k in range(3):
-            pos[i, k] += vel[i, k] * h
-            vel[i, k] += F[i, k] * im * h
-        if rotating:
-            L = _momentum_plus(quat, omega, inertia, iso, i, T, h)
-            q = turn_one(row4(quat, i), row3(omega, i), h)
-            _set4(quat, i, q)
-            _set3(omega, i, diagonal_one(q, row3(inv_inertia, i), L, iso[i]))
-
-
-@njit(cache=True)
-def _semi_implicit_update(pos, quat, vel, omega, F, T, inv_mass, inertia, inv_inertia, iso, h, rotating):
-    """v ← v + a h, x ← x + v h; L ← I_w ω + τ h, then the torque-free rotation."""
-    for i in range(len(pos)):
-        im = inv_mass[i, 0]
-        for k in range(3):
-            vel[i, k] += F[i, k] * im * h
-            pos[i, k] += vel[i, k] * h
-        if rotating:
-            L = _momentum_plus(quat, omega, inertia, iso, i, T, h)
-            q, w = advance_one(row4(quat, i), L, row3(inv_inertia, i), h, iso[i])
-            _set4(quat, i, q)
-            _set3(omega, i, w)
+def _substep(code, sys, h):
+    """integrate_substep on the World's arrays; the effects' cycles into sys._prof."""
+    p = _prepared(sys)
+    s = sys.state
+    p.prof[:] = 0
+    turns = bool(getattr(sys, "rotating", p.model_torque))
+    integrate_substep(code, float(h), p.data, s.pos, s.quat, s.vel, s.omega, sys.inv_mass[:, 0],
+                      sys.inertia, sys.inv_inertia, s.user_force, s.user_force_offset, s.user_torque,
+                      bool(s.has_user_force), bool(s.has_user_torque), turns, p.work, p.prof)
+    prof = getattr(sys, "_prof", None)
+    if prof is not None:
+        for e, key in p.timed:
+            prof[key] = prof.get(key, 0.0) + float(p.prof[e]) * SECONDS_PER_CYCLE
 
 
 def explicit_euler(sys, h):
-    s = sys.state
-    F, T = sys.forces(s.pos, s.quat, s.vel, s.omega)
-    _explicit_euler_update(s.pos, s.quat, s.vel, s.omega, F, T, sys.inv_mass, sys.inertia,
-                           sys.inv_inertia, _isotropic(sys), float(h), bool(sys.rotating))
+    """x ← x + v h, v ← v + a h; q turned by the start-of-step ω."""
+    _substep(INTEGRATOR_CODES["explicit_euler"], sys, h)
 
 
 def semi_implicit_euler(sys, h):
     """v ← v + a h, then x ← x + v h with the new v (symplectic Euler)."""
-    s = sys.state
-    F, T = sys.forces(s.pos, s.quat, s.vel, s.omega)
-    _semi_implicit_update(s.pos, s.quat, s.vel, s.omega, F, T, sys.inv_mass, sys.inertia,
-                          sys.inv_inertia, _isotropic(sys), float(h), bool(sys.rotating))
-
-
-# ---- velocity Verlet ------------------------------------------------------------
-
-@njit(cache=True)
-def _verlet_drift(pos, quat, vel, omega, F, T, inv_mass, inertia, inv_inertia, iso, h, rotating, work):
-    """Kick ½h and drift h. Leaves in `work`: v_half, the predicted end velocity
-    v_half + ½h a, L_half and the predicted end ω = I_w⁻¹ (L_half + ½h τ)."""
-    half = 0.5 * h
-    v_half, v_pred, L_half, omega_pred = work[0], work[1], work[2], work[3]
-    for i in range(len(pos)):
-        im = inv_mass[i, 0]
-        for k in range(3):
-            a = F[i, k] * im
-            v_half[i, k] = vel[i, k] + half * a
-            pos[i, k] += v_half[i, k] * h
-            v_pred[i, k] = v_half[i, k] + half * a
-        if rotating:
-            L = _momentum_plus(quat, omega, inertia, iso, i, T, half)
-            inv = row3(inv_inertia, i)
-            q, _ = advance_one(row4(quat, i), L, inv, h, iso[i])
-            _set4(quat, i, q)
-            _set3(L_half, i, L)
-            _set3(omega_pred, i, diagonal_one(q, inv, _plus(L, row3(T, i), half), iso[i]))
-
-
-@njit(cache=True)
-def _verlet_kick(quat, vel, omega, F, T, inv_mass, inv_inertia, iso, h, rotating, work):
-    """The closing ½h kick with the end-point forces."""
-    half = 0.5 * h
-    v_half, L_half = work[0], work[2]
-    for i in range(len(vel)):
-        im = inv_mass[i, 0]
-        for k in range(3):
-            vel[i, k] = v_half[i, k] + half * F[i, k] * im
-        if rotating:
-            L = _plus(row3(L_half, i), row3(T, i), half)
-            _set3(omega, i, diagonal_one(row4(quat, i), row3(inv_inertia, i), L, iso[i]))
+    _substep(INTEGRATOR_CODES["semi_implicit_euler"], sys, h)
 
 
 def velocity_verlet(sys, h):
-    """Kick ½h, drift h, kick ½h with the forces at the new positions.
-
-    Velocity-dependent forces (drag, dampers) at the end point see the
-    predicted velocity v + a h."""
-    s = sys.state
-    h, rot, iso = float(h), bool(sys.rotating), _isotropic(sys)
-    F0, T0 = sys.forces(s.pos, s.quat, s.vel, s.omega)
-    work = np.empty((4,) + s.vel.shape)          # v_half, v_pred, L_half, ω_pred
-    _verlet_drift(s.pos, s.quat, s.vel, s.omega, F0, T0, sys.inv_mass, sys.inertia, sys.inv_inertia,
-                  iso, h, rot, work)
-    F1, T1 = sys.forces(s.pos, s.quat, work[1], work[3] if rot else s.omega)
-    _verlet_kick(s.quat, s.vel, s.omega, F1, T1, sys.inv_mass, sys.inv_inertia, iso, h, rot, work)
-
-
-# ---- RK4 ---------------------------------------------------------------------------
-# y0 = (x, v, q, L) at the start of the step, one row of 13 numbers per body (only
-# the first 6, x and v, when nothing turns), and `total` = k₁ + 2 k₂ + 2 k₃ of the
-# slopes k = (v, a, dq/dt, τ) in the same layout. The per-body helpers take and
-# return tuples, or are too small not to be inlined: an array passed to a call
-# that is not inlined costs reference counting on every body.
-_X, _V, _Q, _L = 0, 3, 6, 10
-_MOVE, _WIDTH = 6, 13
-
-
-@njit(cache=True)
-def _stage_turn(y_q, y_L, inv, iso):
-    """A stage's orientation normalised, and ω = I_w⁻¹ L at it."""
-    q = normalize_one(y_q)
-    return q, diagonal_one(q, inv, y_L, iso)
-
-
-@njit(cache=True)
-def _add_slope(total, i, j, k, first):
-    """total = k₁, then total + 2 k for the next two stages."""
-    total[i, j] = k if first else total[i, j] + 2.0 * k
-
-
-@njit(cache=True)
-def _ahead3(y0, i, col, c, k):
-    """y0 + c k for 3 numbers from column col of body i."""
-    return (y0[i, col] + c * k[0], y0[i, col + 1] + c * k[1], y0[i, col + 2] + c * k[2])
-
-
-@njit(cache=True)
-def _ahead4(y0, i, col, c, k):
-    return (y0[i, col] + c * k[0], y0[i, col + 1] + c * k[1], y0[i, col + 2] + c * k[2],
-            y0[i, col + 3] + c * k[3])
-
-
-@njit(cache=True)
-def _with_total3(total, i, col, k):
-    """total + k for 3 numbers (the final k₁ + 2 k₂ + 2 k₃ + k₄)."""
-    return (total[i, col] + k[0], total[i, col + 1] + k[1], total[i, col + 2] + k[2])
-
-
-@njit(cache=True)
-def _with_total4(total, i, col, k):
-    return (total[i, col] + k[0], total[i, col + 1] + k[1], total[i, col + 2] + k[2],
-            total[i, col + 3] + k[3])
-
-
-@njit(cache=True)
-def _rk4_begin(pos, quat, vel, omega, inertia, inv_inertia, iso, y0, x, q, v, w):
-    """y0 = (x, v[, q, L = I_w ω]) from the state, and the first stage's pose."""
-    rotating = y0.shape[1] == _WIDTH
-    for i in range(len(pos)):
-        for k in range(3):
-            y0[i, _X + k] = x[i, k] = pos[i, k]
-            y0[i, _V + k] = v[i, k] = vel[i, k]
-        if rotating:
-            q_i = row4(quat, i)
-            L = diagonal_one(q_i, row3(inertia, i), row3(omega, i), iso[i])
-            for k in range(4):
-                y0[i, _Q + k] = q_i[k]
-            for k in range(3):
-                y0[i, _L + k] = L[k]
-            q_n, w_n = _stage_turn(q_i, L, row3(inv_inertia, i), iso[i])
-            _set4(q, i, q_n)
-            _set3(w, i, w_n)
-
-
-@njit(cache=True)
-def _rk4_stage(y0, total, first, c, x, q, v, w, F, T, inv_mass, inv_inertia, iso):
-    """This stage's slope k (at the pose in x, q, v, w) into `total`, and the next
-    stage's pose y0 + c k written over this one (rows are independent)."""
-    for i in range(len(y0)):
-        im = inv_mass[i, 0]
-        for k in range(3):
-            kx, kv = v[i, k], F[i, k] * im
-            _add_slope(total, i, _X + k, kx, first)
-            _add_slope(total, i, _V + k, kv, first)
-            x[i, k] = y0[i, _X + k] + c * kx
-            v[i, k] = y0[i, _V + k] + c * kv
-        if y0.shape[1] == _WIDTH:
-            kq, kL = derivative_one(row4(q, i), row3(w, i)), row3(T, i)
-            for k in range(4):
-                _add_slope(total, i, _Q + k, kq[k], first)
-            for k in range(3):
-                _add_slope(total, i, _L + k, kL[k], first)
-            q_i, w_i = _stage_turn(_ahead4(y0, i, _Q, c, kq), _ahead3(y0, i, _L, c, kL),
-                                   row3(inv_inertia, i), iso[i])
-            _set4(q, i, q_i)
-            _set3(w, i, w_i)
-
-
-@njit(cache=True)
-def _rk4_finish(y0, total, weight, x, q, v, w, F, T, inv_mass, inv_inertia, iso, pos, quat, vel, omega):
-    """y = y0 + (h/6)(k₁ + 2 k₂ + 2 k₃ + k₄) into the state; ω = I_w⁻¹ L at the new q."""
-    for i in range(len(y0)):
-        im = inv_mass[i, 0]
-        for k in range(3):
-            kx, kv = v[i, k], F[i, k] * im
-            pos[i, k] = y0[i, _X + k] + weight * (total[i, _X + k] + kx)
-            vel[i, k] = y0[i, _V + k] + weight * (total[i, _V + k] + kv)
-        if y0.shape[1] == _WIDTH:
-            kq = _with_total4(total, i, _Q, derivative_one(row4(q, i), row3(w, i)))
-            kL = _with_total3(total, i, _L, row3(T, i))
-            q_i, w_i = _stage_turn(_ahead4(y0, i, _Q, weight, kq), _ahead3(y0, i, _L, weight, kL),
-                                   row3(inv_inertia, i), iso[i])
-            _set4(quat, i, q_i)
-            _set3(omega, i, w_i)
+    """Kick ½h, drift h, kick ½h with the forces at the new positions."""
+    _substep(INTEGRATOR_CODES["velocity_verlet"], sys, h)
 
 
 def rk4(sys, h):
     """Classical fourth-order Runge–Kutta on (x, q, v, L); forces re-evaluated at each stage."""
-    s = sys.state
-    h, rot, iso = float(h), bool(sys.rotating), _isotropic(sys)
-    n = len(s.pos)
-    y0, total = np.empty((2, n, _WIDTH if rot else _MOVE))
-    x, v = np.empty_like(s.pos), np.empty_like(s.vel)
-    q, w = (np.empty_like(s.quat), np.empty_like(s.omega)) if rot else (s.quat, s.omega)
-    _rk4_begin(s.pos, s.quat, s.vel, s.omega, sys.inertia, sys.inv_inertia, iso, y0, x, q, v, w)
-    for first, c in ((True, 0.5 * h), (False, 0.5 * h), (False, h)):
-        F, T = sys.forces(x, q, v, w)
-        _rk4_stage(y0, total, first, c, x, q, v, w, F, T, sys.inv_mass, sys.inv_inertia, iso)
-    F, T = sys.forces(x, q, v, w)
-    _rk4_finish(y0, total, h / 6.0, x, q, v, w, F, T, sys.inv_mass, sys.inv_inertia, iso,
-                s.pos, s.quat, s.vel, s.omega)
+    _substep(INTEGRATOR_CODES["rk4"], sys, h)
 
 
 INTEGRATORS = {

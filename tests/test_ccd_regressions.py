@@ -8,7 +8,6 @@ while a held force kept raising its velocity. A rewound body also kept its
 world-frame ω after being turned back, which changes the energy of an
 asymmetric body.
 """
-import math
 
 import numpy as np
 import pytest

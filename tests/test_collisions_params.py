@@ -20,7 +20,7 @@ def test_empty_contacts_gives_the_documented_defaults():
 
 
 def test_every_key_is_read():
-    values = dict(iterations=12, solver="jacobi", tail_fraction=0.2, velocity_tolerance=0.0, static_friction_speed=0.02,
+    values = dict(iterations=12, velocity_tolerance=0.0, static_friction_speed=0.02,
                   warm_start=0.5, margin=0.01, restitution_threshold=1.0, restitution_ramp=0.5,
                   restitution_combine="max", position_iterations=2, slop=0.001, correction_rate=0.5,
                   max_correction_speed=2.0, ccd=False, ccd_threshold=1.0, ccd_iterations=10,
@@ -33,7 +33,7 @@ def test_every_key_is_read():
 
 
 @pytest.mark.parametrize("key, value", [
-    ("iterations", 0), ("iterations", 2.5), ("solver", "newton"), ("warm_start", 1.5),
+    ("iterations", 0), ("iterations", 2.5), ("solver", "jacobi"), ("warm_start", 1.5),
     ("margin", -0.1), ("restitution_combine", "product"), ("ccd", "yes"), ("slop", -1.0),
     ("correction_rate", 2.0), ("sleep_time", -1.0), ("ccd_tolerance", 0.0), ("unknown_key", 1)])
 def test_bad_values_are_rejected_with_their_key_path(key, value):

@@ -166,10 +166,3 @@ def test_same_scene_same_result_bit_for_bit():
         w.step(30)
         hashes.append(_state_hash(w))
     assert hashes[0] == hashes[1]
-
-
-def test_jacobi_solver_holds_a_stack():
-    """The cheaper Jacobi mode (mass splitting) is softer but holds a stack."""
-    w, drift = run(scene("box_stack_10", solver="jacobi", sleep=False), 2.0)
-    assert drift < 0.03
-    assert np.abs(w.state.vel).max() < 0.02

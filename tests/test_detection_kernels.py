@@ -1,5 +1,5 @@
 """Compiled collision detection (collision/detection.py and its kernels)
-against the numpy detector, manifold.detect (COURSE.md 5: contact point,
+against the numpy detector it replaced, tests/numpy_reference (COURSE.md 5: contact point,
 normal, depth): the same rows — keys, a and b exactly, point, normal and
 depth within 1e-12 m — on the scene files, random scenes, a 2,500-box
 scene and a 1,000-sphere pile; the same pairs as broadphase.candidate_pairs;
@@ -9,6 +9,7 @@ import glob
 import math
 import os
 import warnings
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -17,13 +18,13 @@ from hypothesis import strategies as st
 
 import physics_core
 from physics_core import quaternion as qt
-from physics_core.collision.broadphase import candidate_pairs as numpy_pairs
+from numpy_reference.broadphase import candidate_pairs as numpy_pairs
 from physics_core.collision.detection import Detector, signed_depths
 from physics_core.collision.geometry import Geometry
 from physics_core.collision.grid import candidate_pairs
-from physics_core.collision.manifold import detect
-from physics_core.collision.narrowphase import signed_depth
+from numpy_reference.narrowphase import collide, signed_depth
 from physics_core.scene_loader import build_model
+from physics_core.shapes import BOX, PLANE, SPHERE
 
 TOL = 1e-12
 FIELDS = ("a", "b", "key", "point", "normal", "depth")
@@ -38,7 +39,7 @@ def model_of(bodies):
 
 def assert_same_contacts(model, pos, quat, margin):
     """The compiled rows are the numpy rows; returns both manifolds."""
-    ref = detect(model, pos, quat, margin)
+    ref = collide(model, np.asarray(pos, float), np.asarray(quat, float), float(margin), None)
     got = Detector(model).detect(pos, quat, margin)
     assert len(got) == len(ref)
     for f in ("a", "b", "key"):
@@ -199,25 +200,54 @@ def test_bodies_far_apart_and_a_huge_spread_give_the_numpy_contacts():
 
 
 def test_no_pairs_gives_an_empty_manifold():
-    for bodies in ([{"name": "ground", "shape": {"type": "plane"}}],
-                   [{"name": "s", "shape": {"type": "sphere", "radius": 0.1}, "mass": 1.0, "position": [0, 0, 5]}]):
+    ground = {"name": "ground", "shape": {"type": "plane"}}
+    ball = {"name": "s", "shape": {"type": "sphere", "radius": 0.1}, "mass": 1.0, "position": [0, 0, 5]}
+    for bodies in ([ground], [ball], [ground, ball]):
         model = model_of(bodies)
         m = Detector(model).detect(np.array(model.initial["pos"]).reshape(-1, 3),
                                    np.array(model.initial["quat"]).reshape(-1, 4), 0.001)
         assert len(m) == 0 and m.point.shape == (0, 3) and m.key.dtype == np.int64
 
 
+def test_a_non_finite_pose_is_reported_not_propagated():
+    from physics_core.errors import NonFiniteStateError
+    model = sphere_pile(3)
+    pos, quat = np.array(model.initial["pos"]), np.array(model.initial["quat"])
+    det = Detector(model)
+    for bad in (np.nan, np.inf):
+        p = pos.copy()
+        p[5, 1] = bad
+        with pytest.raises(NonFiniteStateError) as err:
+            det.detect(p, quat, 0.001)
+        assert err.value.bodies == (5,)
+    assert len(det.detect(pos, quat, 0.001)) > 0     # and the detector still works
+
+
 # ---- broad phase ----------------------------------------------------------------------
+
+def mixed_scene(rng, n, spread, n_planes, big_fraction, static_fraction=0.2):
+    """The fields of a Model that detection reads (as test_broadphase.random_scene):
+    spheres and boxes, some 20× larger, some static; planes with random normals."""
+    kind = rng.choice([SPHERE, BOX], size=n)
+    kind[:n_planes] = PLANE
+    size = rng.uniform(0.05, 0.5, n) * np.where(rng.random(n) < big_fraction, 20.0, 1.0)
+    normal = qt.normalize(rng.normal(size=(n, 3)))
+    model = SimpleNamespace(
+        n=n, shape_type=kind, radius=size,
+        half_extents=np.stack([size * rng.uniform(0.2, 1.0, n) for _ in range(3)], axis=1),
+        is_static=(rng.random(n) < static_fraction) | (kind == PLANE),
+        plane_normal=normal, plane_offset=rng.uniform(-spread, 0.0, n))
+    return model, rng.uniform(-spread, spread, (n, 3)), qt.normalize(rng.normal(size=(n, 4)))
+
 
 @settings(max_examples=100, deadline=None)
 @given(seed=st.integers(0, 2 ** 32 - 1), n=st.integers(1, 80), spread=st.floats(0.3, 10.0),
        margin=st.sampled_from([0.0, 0.01, 0.2]), n_planes=st.integers(0, 3), big=st.sampled_from([0.0, 0.05, 0.3]))
 def test_grid_pairs_are_the_numpy_broad_phase_pairs(seed, n, spread, margin, n_planes, big):
     """Same (a, b) pairs in the same order, with static bodies, large bodies
-    and tilted planes (the broad-phase test's random scenes)."""
-    from test_broadphase import random_scene
+    and tilted planes."""
     rng = np.random.default_rng(seed)
-    model, pos, quat = random_scene(rng, n + n_planes, spread, planes=n_planes, big_fraction=big)
+    model, pos, quat = mixed_scene(rng, n + n_planes, spread, n_planes, big)
     g = Geometry.from_model(model)
     pairs = candidate_pairs(g.kind, g.dims, g.is_static, g.reach, pos, quat, margin)
     a, b = numpy_pairs(model, pos, quat, margin)
@@ -233,7 +263,7 @@ def test_signed_depth_is_the_numpy_signed_depth(solids, flat, seed):
     model = model_of(scene_bodies(solids, flat))
     rng = np.random.default_rng(seed)
     a, b = np.triu_indices(model.n, k=1)
-    keep = ~((model.shape_type[a] == 2) & (model.shape_type[b] == 2))
+    keep = ~((model.shape_type[a] == PLANE) & (model.shape_type[b] == PLANE))
     a, b = a[keep], b[keep]
     pos, quat = np.array(model.initial["pos"]), np.array(model.initial["quat"])
     pa, pb = pos[a] + rng.normal(0, 0.05, (len(a), 3)), pos[b]
@@ -244,6 +274,16 @@ def test_signed_depth_is_the_numpy_signed_depth(solids, flat, seed):
     finite = np.isfinite(ref)
     assert np.array_equal(np.isfinite(got), finite) and np.all(got[~finite] == ref[~finite])
     np.testing.assert_allclose(got[finite], ref[finite], rtol=0, atol=TOL)
+
+
+def test_constants_are_the_numpy_detectors():
+    from numpy_reference import broadphase, narrow_box
+    from physics_core.collision import box_pair, geometry, grid
+    assert (grid.SMALL_FACTOR, grid.MAX_CELLS) == (broadphase.SMALL_FACTOR, broadphase.MAX_CELLS)
+    assert (box_pair.AXIS_TOL, box_pair.EDGE_EPS) == (narrow_box.AXIS_TOL, narrow_box.EDGE_EPS)
+    model = box_scene(50, seed=2)
+    assert np.array_equal(Geometry.from_model(model).reach, broadphase.bounding_radius(model))
+    assert geometry.Geometry.from_model(model).n == model.n
 
 
 # ---- determinism --------------------------------------------------------------------------

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from physics_core import free_rotation, load_scene
+from physics_core.integration import integration_data
 from physics_core import quaternion as qt
 from physics_scenes import box, scene, sphere
 
@@ -80,8 +81,7 @@ def test_a_mixed_scene_steps_like_the_general_path(integrator):
               sphere("rest", position=(3, 0, 0))]
     fast = load_scene(scene(*bodies, integrator=integrator))
     slow = load_scene(scene(*bodies, integrator=integrator))
-    slow.rotation_rows = free_rotation.RowSplit(np.zeros(slow.model.n, bool))
-    slow.isotropic = np.zeros(slow.model.n, bool)
+    slow._idata = integration_data(slow.model, isotropic=np.zeros(slow.model.n, bool))
     for w in (fast, slow):
         w.apply_torque("cube", [0.0, 0.2, 0.0])
         w.step(240)

@@ -10,12 +10,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from numba import njit
 
-from physics_core.collision import sleep
+from numpy_reference import sleep
 from physics_core.collision import manifold
 from physics_core.collision.event_log import (EventLog, events_add, events_bodies_changed,
                                               events_finish, events_output, events_reset,
                                               new_event_state)
-from physics_core.collision.events import EventAccumulator
+from numpy_reference.events import EventAccumulator
 from physics_core.collision.sleep_islands import SleepTimers
 from physics_core.collision.warm_cache import remap_keys
 from physics_core.contact_events import BEGIN, END, PERSIST, ContactEvents
@@ -339,7 +339,7 @@ def test_a_compiled_loop_keeps_the_state_between_steps_and_calls():
         resting_steps(state, 3, 4, *r.values(), moving)
         assert_same_events(events_output(state), want)
     assert len(want) == k and np.all(want.event == PERSIST)
-    assert len(state[0][0]) >= k and state[2][1] == k   # grown in compiled code, seen here
+    assert len(state[0][0]) >= 4 * k and state[2][1] == k   # grown in compiled code, seen here
 
 
 def test_output_copies_stay_valid_after_the_next_step():

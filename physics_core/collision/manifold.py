@@ -81,11 +81,8 @@ def detect(model, pos, quat, margin: float = 0.0, pairs=None) -> Manifold:
     """Every contact with depth > -margin between the bodies of `model` at poses
     (pos (n, 3), quat (n, 4) w, x, y, z body→world); static–static pairs skipped.
 
-    Broad phase (broadphase.py) proposes pairs whose margin-grown bounding
-    boxes overlap; the narrow phase (narrowphase.py) turns each pair into
-    contact points. Rows are sorted by key, so the result is deterministic.
-    `pairs` (pair_cache.PairCache) keeps the broad phase's list between calls.
-    """
-    from .narrowphase import collide
-    return collide(model, np.asarray(pos, dtype=float), np.asarray(quat, dtype=float),
-                   float(margin), pairs)
+    The compiled broad and narrow phase (detection.py); rows sorted by key,
+    so the result is deterministic. `pairs` is accepted and ignored."""
+    from .detection import Detector
+    return Detector(model).detect(np.asarray(pos, dtype=float), np.asarray(quat, dtype=float),
+                                  float(margin))

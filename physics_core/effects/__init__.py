@@ -4,11 +4,21 @@ that adds into the force and torque accumulators (MuJoCo's passive-force style).
 Only effects the scene declares are built (promise 3): an undeclared effect
 is not in the list and costs nothing.
 
-`make` computes the effect's per-body constants once; `apply` is a thin
-wrapper over one compiled loop (Numba) over the bodies, pairs or springs
-that adds into the accumulators.
+Every effect module has the same four pieces: `constants(model)`, the tuple
+of per-body (per-pair, per-spring) constants and scratch its kernel needs,
+computed once; `unused()`, a tuple of the same types with no rows; `add(c,
+pos, quat, vel, omega, force, torque)`, the compiled kernel that adds the
+effect into the accumulators; and `make`, whose `apply` calls `add` with its
+constants. integration.integration_data packs the same constants (or
+`unused()` for an undeclared effect) for the compiled substep, so both paths
+run the same kernel on the same numbers.
 """
 from . import buoyancy, drag, gravitation, gravity, springs
+
+ORDER = ("gravity", "gravitation", "drag", "buoyancy", "springs")
+"""The fixed order in which declared effects add into F and τ."""
+MODULES = {"gravity": gravity, "gravitation": gravitation, "drag": drag, "buoyancy": buoyancy,
+           "springs": springs}
 
 
 class Kinematics:
@@ -19,20 +29,21 @@ class Kinematics:
         self.pos, self.quat, self.vel, self.omega = pos, quat, vel, omega
 
 
+def declared_effects(model):
+    """The names of the effects this scene declares, in ORDER: gravity when its
+    vector is not zero, springs when there are any, the others when named
+    under `effects`."""
+    on = {"gravity": model.gravity is not None and bool(model.gravity.any()),
+          "gravitation": "gravitation" in model.effects,
+          "drag": "drag" in model.effects,
+          "buoyancy": "buoyancy" in model.effects,
+          "springs": len(model.springs) > 0}
+    return tuple(name for name in ORDER if on[name])
+
+
 def build_force_effects(model):
     """[(name, apply)] in a fixed order, for the effects this scene declares."""
-    out = []
-    if model.gravity is not None and model.gravity.any():
-        out.append(("gravity", gravity.make(model)))
-    if "gravitation" in model.effects:
-        out.append(("gravitation", gravitation.make(model)))
-    if "drag" in model.effects:
-        out.append(("drag", drag.make(model)))
-    if "buoyancy" in model.effects:
-        out.append(("buoyancy", buoyancy.make(model)))
-    if len(model.springs):
-        out.append(("springs", springs.make(model)))
-    return out
+    return [(name, MODULES[name].make(model)) for name in declared_effects(model)]
 
 
 def potential_energy(model, state) -> float:

@@ -10,9 +10,10 @@ volume, and a tilted box feels the restoring torque of its moving centre of
 buoyancy. Optional damping stands for the fluid's viscous resistance and is
 scaled by the submerged fraction.
 
-The cell offsets and volumes are computed once (`make`); a call is two
+The cell offsets and volumes are computed once (`constants`); a call is two
 compiled loops, over the spheres and over the boxes (and, for a box cut by
-the surface, over its cells).
+the surface, over its cells), from `make`'s apply or from the compiled
+substep (integration.py).
 """
 import math
 
@@ -109,26 +110,48 @@ def _cell_offsets(half, k):
     return np.ascontiguousarray(grid[None, :, :] * half[:, None, :])
 
 
-def make(model):
+def constants(model):
+    """(spheres, r, sphere volume, boxes, half extents, cell offsets, cells, cell
+    volume, box volume, up, surface z, linear and angular damping, damped): the
+    dynamic spheres and boxes with their sizes, each box's cell centres in body
+    axes (B, cells³, 3), up = −ρ g (the push per unit submerged volume) and the
+    fluid's parameters, computed once per model."""
     p = model.effects["buoyancy"]
     dynamic = ~model.is_static
-    spheres = np.flatnonzero(dynamic & (model.shape_type == SPHERE))
-    boxes = np.flatnonzero(dynamic & (model.shape_type == BOX))
-    r = np.ascontiguousarray(model.radius[spheres], dtype=float)
-    sphere_volume = np.ascontiguousarray(model.volume[spheres], dtype=float)
-    half = np.ascontiguousarray(model.half_extents[boxes], dtype=float)
-    offsets = _cell_offsets(half, p.cells)
-    box_volume = np.ascontiguousarray(model.volume[boxes], dtype=float)
-    cell_volume = box_volume / p.cells ** 3
-    up = np.ascontiguousarray(-p.fluid_density * model.gravity, dtype=float)   # per unit submerged volume
-    surface, linear, angular = float(p.surface_z), float(p.linear_damping), float(p.angular_damping)
-    damped = bool(p.linear_damping or p.angular_damping)
+    spheres = np.flatnonzero(dynamic & (model.shape_type == SPHERE)).astype(np.int64)
+    boxes = np.flatnonzero(dynamic & (model.shape_type == BOX)).astype(np.int64)
+    half = np.array(model.half_extents[boxes], dtype=float)
+    box_volume = np.array(model.volume[boxes], dtype=float)
+    return (spheres, np.array(model.radius[spheres], dtype=float), np.array(model.volume[spheres], dtype=float),
+            boxes, half, _cell_offsets(half, p.cells), int(p.cells), box_volume / p.cells ** 3, box_volume,
+            np.array(-p.fluid_density * model.gravity, dtype=float), float(p.surface_z),
+            float(p.linear_damping), float(p.angular_damping), bool(p.linear_damping or p.angular_damping))
+
+
+def unused():
+    """The types of `constants` with no bodies, for a scene without buoyancy."""
+    rows, none = np.zeros(0, dtype=np.int64), np.zeros(0)
+    return (rows, none, none.copy(), rows.copy(), np.zeros((0, 3)), np.zeros((0, 1, 3)), 1, none.copy(),
+            none.copy(), np.zeros(3), 0.0, 0.0, 0.0, False)
+
+
+@njit(cache=True)
+def add(c, pos, quat, vel, omega, force, torque):
+    """The effect's kernel on the common signature of effects/: the spheres, then the boxes."""
+    spheres, r, sphere_volume, boxes, half, offsets, cells, cell_volume, box_volume, up, surface, \
+        linear, angular, damped = c
+    if len(spheres):
+        sphere_forces(spheres, r, sphere_volume, pos, vel, omega, force, torque, surface, up, linear, angular,
+                      damped)
+    if len(boxes):
+        box_forces(boxes, half, offsets, cells, cell_volume, box_volume, pos, quat, vel, omega, force, torque,
+                   surface, up, linear, angular, damped)
+
+
+def make(model):
+    """apply(kin, force, torque): `add` with this model's constants (World.forces' path)."""
+    c = constants(model)
 
     def apply(kin, force, torque):
-        if len(spheres):
-            sphere_forces(spheres, r, sphere_volume, kin.pos, kin.vel, kin.omega, force, torque,
-                          surface, up, linear, angular, damped)
-        if len(boxes):
-            box_forces(boxes, half, offsets, p.cells, cell_volume, box_volume, kin.pos, kin.quat, kin.vel,
-                       kin.omega, force, torque, surface, up, linear, angular, damped)
+        add(c, kin.pos, kin.quat, kin.vel, kin.omega, force, torque)
     return apply

@@ -9,8 +9,9 @@ the body gives its own b; above, quadratic.
 A box without a given area uses its exact projected area along v̂:
 A = 4 (|v̂_x| h_y h_z + |v̂_y| h_x h_z + |v̂_z| h_x h_y) in body axes.
 
-Per-body coefficients are computed once from the model (`make`); a call is
-one compiled loop over the bodies that feel drag (`drag_forces`).
+Per-body coefficients are computed once from the model (`constants`); a call
+is one compiled loop over the bodies that feel drag (`drag_forces`), from
+`make`'s apply or from the compiled substep (integration.py).
 """
 import math
 
@@ -18,7 +19,7 @@ import numpy as np
 from numba import njit
 
 from ..quaternion import rotate_inverse_one, row3, row4
-from ..shapes import BOX
+from ..shapes import BOX, PLANE
 
 LINEAR, QUADRATIC, REYNOLDS = 0, 1, 2
 MODELS = {"linear": LINEAR, "quadratic": QUADRATIC, "reynolds": REYNOLDS}
@@ -71,15 +72,38 @@ def _coefficients(model, p, idx):
     return b, fixed_area, box, face
 
 
-def make(model):
+def constants(model):
+    """(kind, idx, b, area, ½ρC_d, box, face, ρL/μ, threshold): the drag model's
+    code, the rows that feel drag (dynamic, not planes) and their coefficients
+    (see `drag_forces`), computed once per model."""
     p = model.effects["drag"]
-    idx = np.flatnonzero(~model.is_static & (model.shape_type != 2))
-    b, fixed_area, box, face = (np.ascontiguousarray(a) for a in _coefficients(model, p, idx))
-    half_rho_cd = np.ascontiguousarray(0.5 * p.fluid_density * model.drag_cd[idx])
-    re_factor = np.ascontiguousarray(p.fluid_density * model.char_length[idx] / p.viscosity)
-    kind, threshold = MODELS[p.model], float(p.reynolds_threshold)
+    idx = np.flatnonzero(~model.is_static & (model.shape_type != PLANE)).astype(np.int64)
+    b, fixed_area, box, face = _coefficients(model, p, idx)
+    half_rho_cd = 0.5 * p.fluid_density * model.drag_cd[idx]
+    re_factor = p.fluid_density * model.char_length[idx] / p.viscosity
+    own = lambda a, dtype=float: np.array(a, dtype=dtype, order="C")   # a writable C copy
+    return (MODELS[p.model], idx, own(b), own(fixed_area), own(half_rho_cd), own(box, bool), own(face),
+            own(re_factor), float(p.reynolds_threshold))
+
+
+def unused():
+    """The types of `constants` with no rows, for a scene without drag."""
+    none = np.zeros(0)
+    return (LINEAR, np.zeros(0, dtype=np.int64), none, none.copy(), none.copy(), np.zeros(0, dtype=bool),
+            np.zeros((0, 3)), none.copy(), 1.0)
+
+
+@njit(cache=True)
+def add(c, pos, quat, vel, omega, force, torque):
+    """The effect's kernel on the common signature of effects/ (no torque)."""
+    kind, idx, b, area, half_rho_cd, box, face, re_factor, threshold = c
+    drag_forces(kind, idx, quat, vel, force, b, area, half_rho_cd, box, face, re_factor, threshold)
+
+
+def make(model):
+    """apply(kin, force, torque): `add` with this model's constants (World.forces' path)."""
+    c = constants(model)
 
     def apply(kin, force, torque):
-        drag_forces(kind, idx, kin.quat, kin.vel, force, b, fixed_area, half_rho_cd, box, face,
-                    re_factor, threshold)
+        add(c, kin.pos, kin.quat, kin.vel, kin.omega, force, torque)
     return apply

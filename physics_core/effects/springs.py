@@ -17,7 +17,9 @@ internal sub-steps. Explicit Euler grows an undamped oscillation by
 stop it, so stiff undamped springs need another integrator.
 
 The forces are one compiled loop over the springs (`spring_forces`), then
-one over each end adding them to the bodies in spring order.
+one over each end adding them to the bodies in spring order; the pulls and
+lever arms go through scratch arrays made once with the constants
+(`constants`), so an evaluation allocates nothing.
 """
 import math
 import warnings
@@ -182,11 +184,10 @@ def _add_torques(out, body, arm, f, sign):
 
 @njit(cache=True)
 def spring_forces(body, local, fixed, turns, stiffness, rest, damping, damped, pos, quat, vel, omega,
-                  force, torque):
-    """Every spring's pull, then F and τ = r × F added at each end (a: +F, b: −F)."""
+                  force, torque, f, arm):
+    """Every spring's pull, then F and τ = r × F added at each end (a: +F, b: −F).
+    f (m, 3) and arm (2, m, 3): scratch for the pulls and lever arms, overwritten."""
     m = body.shape[1]
-    f = np.empty((m, 3))
-    arm = np.empty((2, m, 3))
     for s in range(m):
         i, j = max(body[0, s], 0), max(body[1, s], 0)        # a world end reads row 0, unused
         pa, ra, va = _end_state(body[0, s] >= 0, turns[0], _at(local, 0, s), _at(fixed, 0, s), row3(pos, i),
@@ -204,19 +205,42 @@ def spring_forces(body, local, fixed, turns, stiffness, rest, damping, damped, p
         _add_torques(torque, body[1], arm[1], f, -1.0)
 
 
-def make(model):
+def constants(model):
+    """(body, local, fixed, turns, K, l₀, C, damped, f, arm): each spring's end
+    bodies (2, m) (-1: the world), body-frame offsets and world points of its
+    ends (2, m, 3), whether either end is off a centre of mass, stiffness, rest
+    length and damping (m,), and the kernel's scratch f (m, 3), arm (2, m, 3)."""
     s = model.springs
     ends = _ends(model)
     body = np.ascontiguousarray(np.stack([np.where(e.on_body, e.row, -1) for e in ends]), dtype=np.int64)
     local = np.ascontiguousarray(np.stack([e.local for e in ends]), dtype=float)
     fixed = np.ascontiguousarray(np.stack([e.fixed for e in ends]), dtype=float)
-    turns = np.array([e.turns for e in ends])
-    k, l0, c = (np.ascontiguousarray(a, dtype=float) for a in (s.stiffness, s.rest_length, s.damping))
-    damped = bool(np.any(c))
+    turns = np.array([e.turns for e in ends], dtype=bool)
+    k, l0, c = (np.array(a, dtype=float) for a in (s.stiffness, s.rest_length, s.damping))   # own copies
+    m = len(s)
+    return body, local, fixed, turns, k, l0, c, bool(np.any(c)), np.zeros((m, 3)), np.zeros((2, m, 3))
+
+
+def unused():
+    """The types of `constants` with no springs, for a scene without them."""
+    none = np.zeros(0)
+    return (np.zeros((2, 0), dtype=np.int64), np.zeros((2, 0, 3)), np.zeros((2, 0, 3)), np.zeros(2, dtype=bool),
+            none, none.copy(), none.copy(), False, np.zeros((0, 3)), np.zeros((2, 0, 3)))
+
+
+@njit(cache=True)
+def add(c, pos, quat, vel, omega, force, torque):
+    """The effect's kernel on the common signature of effects/."""
+    body, local, fixed, turns, k, l0, damping, damped, f, arm = c
+    spring_forces(body, local, fixed, turns, k, l0, damping, damped, pos, quat, vel, omega, force, torque, f, arm)
+
+
+def make(model):
+    """apply(kin, force, torque): `add` with this model's constants (World.forces' path)."""
+    c = constants(model)
 
     def apply(kin, force, torque):
-        spring_forces(body, local, fixed, turns, k, l0, c, damped, kin.pos, kin.quat, kin.vel, kin.omega,
-                      force, torque)
+        add(c, kin.pos, kin.quat, kin.vel, kin.omega, force, torque)
     return apply
 
 

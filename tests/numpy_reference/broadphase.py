@@ -24,8 +24,8 @@ every plane by its lowest point along the plane normal.
 """
 import numpy as np
 
-from .. import quaternion as qt
-from ..shapes import BOX, PLANE, SPHERE
+from physics_core import quaternion as qt
+from physics_core.shapes import BOX, PLANE, SPHERE
 
 SMALL_FACTOR = 4.0     # a body more than this × the median AABB extent is "large"
 MAX_CELLS = 2 ** 20    # grid cells per axis; a wider scene gets a coarser grid

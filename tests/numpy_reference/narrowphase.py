@@ -13,10 +13,10 @@ Box–box lives in narrow_box.py.
 """
 import numpy as np
 
-from .. import quaternion as qt
-from ..shapes import BOX, PLANE, SPHERE
+from physics_core import quaternion as qt
+from physics_core.shapes import BOX, PLANE, SPHERE
 from .broadphase import candidate_pairs
-from .manifold import Manifold, pair_key
+from physics_core.collision.manifold import Manifold, pair_key
 
 try:        # the C entry point of np.einsum, without the Python dispatch layer
     from numpy._core.multiarray import c_einsum as _einsum

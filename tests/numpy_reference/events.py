@@ -14,9 +14,9 @@ speed is the largest approach speed seen (before the solve, > 0 closing).
 """
 import numpy as np
 
-from ..contact_events import BEGIN, END, PERSIST, ContactEvents
-from .manifold import same
-from .solver import einsum as _einsum
+from physics_core.contact_events import BEGIN, END, PERSIST, ContactEvents
+from physics_core.collision.manifold import same
+from numpy import einsum as _einsum
 
 
 class EventAccumulator:

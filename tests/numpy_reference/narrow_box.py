@@ -13,7 +13,7 @@ gives one point, midway between the closest points of the two edges.
 """
 import numpy as np
 
-from .. import quaternion as qt
+from physics_core import quaternion as qt
 
 EDGE_EPS = 1e-5        # |A_i × B_j| below this: the edges are parallel, the axis is skipped
 BOX_BLOCK = 2048        # box pairs handled together

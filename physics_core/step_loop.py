@@ -1,0 +1,89 @@
+"""world.step(n) as one compiled loop over steps, substeps and stages.
+
+Each stage is its own compiled function (integration.py for the integrator
+and the force effects, collision/contact_substep.py for the contact stages),
+timed with the cycle counter into `prof` and followed by the finite check.
+Looping in compiled code means a step pays no interpreter cost: a one-body
+world steps in about a microsecond, and the arguments below are passed once
+per call of world.step(n), not once per step.
+
+`run_steps` returns (steps done, failed stage): failed is -1, or the stage
+after which some body's state was not finite (the World names it and the
+bodies; the state is left as that stage made it).
+"""
+import numpy as np
+from numba import njit
+
+from .collision.contact_substep import N_STAGES
+from .collision.contact_substep import run as contact_substep
+from .cycle_clock import cycles
+from .finite import non_finite_bodies
+from .integration import integrate_substep
+
+# prof slots: the contact stages first (contact_substep's own indices), then these
+INTEGRATE = N_STAGES
+FINITE = N_STAGES + 1
+FORCES = N_STAGES + 2          # one per force effect, integration.py's order
+FAILED_INTEGRATE = 100
+
+
+@njit(cache=True)
+def _integrate(code, h, idata, body, loads, masses, work, prof):
+    pos, quat, vel, omega, awake = body
+    user_force, user_force_offset, user_torque, flags = loads
+    inv_mass, inertia, inv_inertia = masses
+    t = cycles()
+    integrate_substep(code, h, idata, pos, quat, vel, omega, inv_mass, inertia, inv_inertia,
+                      user_force, user_force_offset, user_torque, flags[0] != 0, flags[1] != 0,
+                      flags[2] != 0, work, prof[FORCES:])
+    prof[INTEGRATE] += cycles() - t
+
+
+@njit(cache=True)
+def _finite(body, prof):
+    t = cycles()
+    ok = len(non_finite_bodies(body[0], body[1], body[2], body[3])) == 0
+    prof[FINITE] += cycles() - t
+    return ok
+
+
+@njit(cache=True)
+def _one_step(substeps, dt, code, idata, body, loads, masses, work, contacts, prof):
+    """One step; -1 or the failed stage."""
+    pos, quat = body[0], body[1]
+    cm, fp, ip, sleep, warm, events, cap = contacts
+    h = dt / substeps
+    for sub in range(substeps):
+        p0, q0 = pos.copy(), quat.copy()
+        _integrate(code, h, idata, body, loads, masses, work, prof)
+        if not _finite(body, prof):
+            return FAILED_INTEGRATE
+        if len(cm.kind):
+            failed = contact_substep(cm, fp, ip, body, (masses[0], masses[2]), p0, q0, sleep,
+                                     warm, events, h, dt, sub == 0, sub == substeps - 1, cap,
+                                     prof)
+            if failed >= 0:
+                return failed
+    return -1
+
+
+@njit(cache=True)
+def run_steps(n, substeps, dt, code, idata, body, loads, masses, work, contacts, prof):
+    """Up to n steps; (steps done, failed stage or -1)."""
+    for k in range(n):
+        failed = _one_step(substeps, dt, code, idata, body, loads, masses, work, contacts, prof)
+        if failed >= 0:
+            return k, failed
+    return n, -1
+
+
+def no_contacts():
+    """The `contacts` argument of a scene without the contacts effect."""
+    from .collision.contact_data import ContactModel, new_sleep_state, new_warm_cache
+    from .collision.event_log import new_event_state
+    z = np.zeros(0)
+    cm = ContactModel(np.zeros(0, np.int64), np.zeros((0, 8)), np.zeros(0, np.bool_), z,
+                      np.zeros(0, np.int64), z, z, np.zeros((0, 3)), np.zeros((1, 1)),
+                      np.zeros((1, 1)))
+    return (cm, np.zeros(16), np.zeros(8, np.int64), new_sleep_state(0), new_warm_cache(),
+            new_event_state(), np.zeros(1, np.int64))

@@ -1,0 +1,88 @@
+"""The World's commands (INTERFACE.md Python API): held forces and torques,
+one-shot impulses. Every argument is checked before the state is touched,
+so a refused command (CommandError) leaves no trace, not even its valid half.
+"""
+import numpy as np
+
+from . import quaternion as qt
+from .errors import CommandError
+from .vec3 import cross
+
+
+class CommandsMixin:
+    def _body_index(self, name) -> int:
+        i = self.model.index.get(name)
+        if i is None:
+            raise CommandError(f"unknown body {name!r}; bodies are: {', '.join(self.model.names)}")
+        if self.model.is_static[i]:
+            raise CommandError(f"body {name!r} is static: forces and impulses do not move it")
+        return i
+
+    @staticmethod
+    def _vec(value, what) -> np.ndarray:
+        try:
+            v = np.array(value, dtype=float).reshape(3)
+        except (TypeError, ValueError):
+            raise CommandError(f"{what}: expected 3 numbers, got {value!r}") from None
+        if not np.all(np.isfinite(v)):
+            raise CommandError(f"{what}: expected finite numbers, got {v.tolist()}")
+        return v
+
+    def apply_force(self, name, force, point=None):
+        """Hold a force (N, world frame) on a body until replaced; zero clears it.
+
+        With a world `point`, the force acts there: the point is fixed to the
+        body (stored in body axes) so τ = r × F follows the body as it turns."""
+        i = self._body_index(name)
+        f = self._vec(force, f"force on {name!r}")
+        # Validate every argument before touching the state: a refused command
+        # must leave no trace (not even its valid half).
+        p = None if point is None else self._vec(point, f"point of force on {name!r}")
+        s = self.state
+        s.user_force[i] = f
+        s.has_user_force = True
+        if p is None:
+            s.user_force_offset[i] = 0.0
+        else:
+            s.user_force_offset[i] = qt.rotate_inverse(s.quat[i:i + 1], (p - s.pos[i])[None])[0]
+            s.has_user_torque = True
+        self.wake(i)
+
+    def apply_torque(self, name, torque):
+        """Hold a torque (N·m, world frame) on a body until replaced; zero clears it."""
+        i = self._body_index(name)
+        self.state.user_torque[i] = self._vec(torque, f"torque on {name!r}")
+        self.state.has_user_torque = True
+        self.wake(i)
+
+    def apply_impulse(self, name, impulse, point=None):
+        """A linear impulse (N·s, world frame), applied once at the next step.
+
+        At a world `point`, it also adds the angular impulse r × J."""
+        i = self._body_index(name)
+        j = self._vec(impulse, f"impulse on {name!r}")
+        p = None if point is None else self._vec(point, f"point of impulse on {name!r}")
+        s = self.state
+        s.impulse[i] += j
+        if p is not None:
+            s.angular_impulse[i] += cross(p - s.pos[i], j)
+        s.has_pending_impulse = True
+        self.wake(i)
+
+    def apply_angular_impulse(self, name, angular_impulse):
+        """An angular impulse (N·m·s, world frame), applied once at the next step."""
+        i = self._body_index(name)
+        self.state.angular_impulse[i] += self._vec(angular_impulse, f"angular impulse on {name!r}")
+        self.state.has_pending_impulse = True
+        self.wake(i)
+
+    def _apply_impulses(self):
+        """Δv = J/m, ΔL = r × J + angular impulse (COURSE.md 3, angular impulse)."""
+        s = self.state
+        s.vel += s.impulse * self.inv_mass
+        L = (s.angular_impulse if not s.omega.any() else
+             qt.rotate(s.quat, self.inertia * qt.rotate_inverse(s.quat, s.omega)) + s.angular_impulse)
+        s.omega[:] = qt.rotate(s.quat, self.inv_inertia * qt.rotate_inverse(s.quat, L))
+        s.impulse[:] = 0.0
+        s.angular_impulse[:] = 0.0
+        s.has_pending_impulse = False
