@@ -208,6 +208,18 @@ def scenes(draw):
     return sc, commands, sleepers
 
 
+def _prepare(world, commands, sleepers):
+    for kind, name, value, point in commands:
+        if kind == "force":
+            world.apply_force(name, value, point=point)
+        else:
+            world.apply_torque(name, value)
+    for i in sleepers:
+        world.state.awake[i] = False
+    world.refresh_awake()
+    return world
+
+
 def _lever(sc):
     """The largest lever arm in the scene (body sizes, spring attachments), m."""
     arms = [_size(b) for b in sc["bodies"]]

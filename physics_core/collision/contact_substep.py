@@ -14,8 +14,9 @@ from ..finite import non_finite_bodies
 from .contact_data import (CCD_ITERATIONS, CCD_ON, CCD_THRESHOLD, CCD_TOLERANCE, MARGIN,
                            SLEEP_ON)
 from .contact_layout import LAM, U0
-from .contact_stages import (ccd_stage, correct_stage, detect_stage, restitution_stage,
-                             rows_stage, sleep_stage, solve_stage, solver_masses)
+from .contact_stages import (ccd_stage, correct_stage, detect_stage, moving_bodies,
+                             restitution_stage, rows_stage, sleep_stage, solve_stage,
+                             solver_masses)
 from .event_log import events_add, events_finish, events_reset
 from .time_of_impact import rewind_bodies
 
@@ -40,6 +41,22 @@ def _collide(cm, fp, ip, s, masses, sleep, warm, toi, h, cap):
     R, I = rows_stage(cm, fp, ip, contacts, pos, quat, vel, omega, masses[0], masses[1], warm,
                       toi, h)
     return contacts, R, I, k
+
+
+@njit(cache=True)
+def _correct(cm, fp, ip, R, I, s, vel0, omega0, target, tau, toi, h):
+    """correct, then the rest of the substep of the bodies ccd moved back,
+    searched like a whole substep (time_of_impact.py)."""
+    pos, quat, vel, omega, awake = s
+    rewound = toi >= 0.0
+    again = rewound.any()
+    p_impact = pos.copy() if again else pos[:0]
+    q_impact = quat.copy() if again else quat[:0]
+    correct_stage(fp, ip, R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, h)
+    if again:
+        rewind_bodies(cm.kind, cm.dims, cm.reach, cm.is_static, rewound, p_impact, q_impact,
+                      pos, quat, omega, fp[CCD_THRESHOLD], fp[MARGIN], ip[CCD_ITERATIONS],
+                      fp[CCD_TOLERANCE], toi)
 
 
 @njit(cache=True)
@@ -80,24 +97,15 @@ def run(cm, fp, ip, s, masses, p0, q0, sleep, warm, events, h, dt, first, last, 
     t = cycles()
     target, tau = restitution_stage(fp, R, I, vel, omega, h)
     prof[RESTITUTION] += cycles() - t
+    if not _finite(pos, quat, vel, omega):
+        return RESTITUTION
     t = cycles()
-    rewound = toi >= 0.0
-    if rewound.any():
-        at_impact = (pos.copy(), quat.copy())
-    correct_stage(fp, ip, R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, h)
-    if rewound.any():
-        # the rest of the substep of the bodies moved back, searched like the whole
-        rewind_bodies(cm.kind, cm.dims, cm.reach, cm.is_static, rewound, at_impact[0],
-                      at_impact[1], pos, quat, omega, fp[CCD_THRESHOLD], fp[MARGIN],
-                      ip[CCD_ITERATIONS], fp[CCD_TOLERANCE], toi)
+    _correct(cm, fp, ip, R, I, s, vel0, omega0, target, tau, toi, h)
     prof[CORRECT] += cycles() - t
     if not _finite(pos, quat, vel, omega):
         return CORRECT
     t = cycles()
-    moving = np.empty(len(awake), np.bool_)
-    for i in range(len(awake)):
-        moving[i] = awake[i] and not cm.is_static[i]
-    _events(events, contacts, R, friction, moving, last)
+    _events(events, contacts, R, friction, moving_bodies(cm.is_static, awake), last)
     prof[EVENTS] += cycles() - t
     if last and ip[SLEEP_ON]:
         t = cycles()

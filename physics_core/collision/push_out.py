@@ -22,30 +22,34 @@ from .contact_layout import (ARM_A, ARM_B, BODY_A, BODY_B, DEPTH, DIR, INV_MASS_
 
 
 @njit(cache=True)
+def bounce_remainders(n, I, target, tau):
+    """(n,) per body the largest 1 − τ of its bouncing contacts (-1: none)."""
+    after = np.full(n, -1.0)
+    for c in range(len(target)):
+        if target[c] > 0.0:
+            for body in (I[c, BODY_A], I[c, BODY_B]):
+                after[body] = max(after[body], 1.0 - tau[c])
+    return after
+
+
+@njit(cache=True)
 def velocity_changes(vel, omega, vel0, omega0, I, target, tau, toi):
     """(n, 6) the rate each body still moves at over h beyond the integrator's
     motion: what the solve changed, over the part of the substep it acts on;
     a body moved back to its time of impact toi (≥ 0) moves with its solved
     velocity over the rest of the substep, (1 − toi) h."""
     n = len(vel)
+    after = bounce_remainders(n, I, target, tau)
     dV = np.empty((n, 6))
     for i in range(n):
+        rest = 1.0 - toi[i]
+        scale = after[i] if after[i] >= 0.0 else 1.0
         for j in range(3):
-            dV[i, j] = vel[i, j] - vel0[i, j]
-            dV[i, 3 + j] = omega[i, j] - omega0[i, j]
-    after = np.full(n, -1.0)
-    for c in range(len(target)):
-        if target[c] > 0.0:
-            for body in (I[c, BODY_A], I[c, BODY_B]):
-                after[body] = max(after[body], 1.0 - tau[c])
-    for i in range(n):
-        if toi[i] >= 0.0:
-            for j in range(3):
-                dV[i, j] = vel[i, j] * (1.0 - toi[i])
-                dV[i, 3 + j] = omega[i, j] * (1.0 - toi[i])
-        elif after[i] >= 0.0:
-            for j in range(6):
-                dV[i, j] *= after[i]
+            if toi[i] >= 0.0:
+                dV[i, j], dV[i, 3 + j] = vel[i, j] * rest, omega[i, j] * rest
+            else:
+                dV[i, j] = (vel[i, j] - vel0[i, j]) * scale
+                dV[i, 3 + j] = (omega[i, j] - omega0[i, j]) * scale
     return dV
 
 

@@ -100,6 +100,21 @@ def swept_box(kind, dims, reach, i, p0, q0, pos, quat, margin, box):
 
 
 @njit(cache=True)
+def boxes_meet(boxes, s, t):
+    """Whether swept boxes s and t overlap on y and z (x is the sweep's axis)."""
+    return not (boxes[s, 1] > boxes[t, 4] or boxes[t, 1] > boxes[s, 4]
+                or boxes[s, 2] > boxes[t, 5] or boxes[t, 2] > boxes[s, 5])
+
+
+@njit(cache=True)
+def manifold_order(i, j, is_static):
+    """(a, b): a static body first, else the lower index."""
+    if is_static[j] or (not is_static[i] and j < i):
+        return j, i
+    return i, j
+
+
+@njit(cache=True)
 def solid_candidates(kind, dims, reach, is_static, fast, p0, q0, pos, quat, margin):
     """(a, b) pairs of solid bodies, one of them fast, whose swept boxes meet
     (sort and sweep along x); a static body is `a`."""
@@ -118,15 +133,10 @@ def solid_candidates(kind, dims, reach, is_static, fast, p0, q0, pos, quat, marg
             if boxes[t, 0] > boxes[s, 3]:
                 break
             i, j = solid[s], solid[t]
-            if not (fast[i] or fast[j]) or (is_static[i] and is_static[j]):
-                continue
-            if boxes[s, 1] > boxes[t, 4] or boxes[t, 1] > boxes[s, 4] \
-                    or boxes[s, 2] > boxes[t, 5] or boxes[t, 2] > boxes[s, 5]:
-                continue
-            if is_static[j] or (not is_static[i] and j < i):
-                i, j = j, i
-            out_a.append(i)
-            out_b.append(j)
+            if (fast[i] or fast[j]) and not (is_static[i] and is_static[j]) and boxes_meet(boxes, s, t):
+                a, b = manifold_order(i, j, is_static)
+                out_a.append(a)
+                out_b.append(b)
     return out_a, out_b
 
 
