@@ -68,22 +68,30 @@ def _one_step(substeps, dt, code, idata, body, loads, masses, work, contacts, pr
 
 
 @njit(cache=True)
-def run_steps(n, substeps, dt, code, idata, body, loads, masses, work, contacts, prof):
-    """Up to n steps; (steps done, failed stage or -1)."""
+def run_steps(n, substeps, dt, code, idata, body, loads, masses, work, contacts, warm_keys,
+              warm_values, event_ints, event_floats, event_counts, prof):
+    """Up to n steps; (steps done, failed stage or -1). `contacts` = (contact
+    model, float and int parameters, sleep state, row-count guess); the warm
+    cache and the event log's typed lists come as arguments of their own
+    (numba types a tuple holding typed lists anew on every call, which costs
+    tens of microseconds; alone, a list costs well under one)."""
+    cm, fp, ip, sleep, cap = contacts
+    packed = (cm, fp, ip, sleep, (warm_keys, warm_values),
+              (event_ints, event_floats, event_counts), cap)
     for k in range(n):
-        failed = _one_step(substeps, dt, code, idata, body, loads, masses, work, contacts, prof)
+        failed = _one_step(substeps, dt, code, idata, body, loads, masses, work, packed, prof)
         if failed >= 0:
             return k, failed
     return n, -1
 
 
 def no_contacts():
-    """The `contacts` argument of a scene without the contacts effect."""
+    """(contacts, warm cache, event state) of a scene without the contacts effect."""
     from .collision.contact_data import ContactModel, new_sleep_state, new_warm_cache
     from .collision.event_log import new_event_state
     z = np.zeros(0)
     cm = ContactModel(np.zeros(0, np.int64), np.zeros((0, 8)), np.zeros(0, np.bool_), z,
                       np.zeros(0, np.int64), z, z, np.zeros((0, 3)), np.zeros((1, 1)),
                       np.zeros((1, 1)))
-    return (cm, np.zeros(16), np.zeros(8, np.int64), new_sleep_state(0), new_warm_cache(),
-            new_event_state(), np.zeros(1, np.int64))
+    return ((cm, np.zeros(16), np.zeros(8, np.int64), new_sleep_state(0), np.zeros(1, np.int64)),
+            new_warm_cache(), new_event_state())

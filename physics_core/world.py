@@ -49,7 +49,7 @@ class World(CommandsMixin, ReadingMixin):
         self.contacts = ContactEvents.empty()
         self._profile = defaultdict(float)
         self._cycles = np.zeros(FORCES + N_EFFECTS, np.int64)   # step_loop's prof slots
-        self.last_step_profile = {}
+        self._last = None             # (cycles before the last call, its steps)
         self.last_step_seconds = 0.0
         self._build(model)
 
@@ -98,12 +98,11 @@ class World(CommandsMixin, ReadingMixin):
         done, failed = self._run(n)
         s.step_index += done
         s.time = s.step_index * self.model.dt
-        if self.contact_system is not None:
-            self.contacts = self.contact_system.events()
+        self._contacts = None           # read from the event log when asked for
         elapsed = perf_counter() - start
         self._profile["step"] += elapsed
         self.last_step_seconds = elapsed / max(done, 1)
-        self.last_step_profile = self._seconds(self._cycles - before, max(done, 1))
+        self._last = (before, max(done, 1))
         if failed >= 0:
             self._raise_non_finite("integrate" if failed == FAILED_INTEGRATE else STAGE_NAMES[failed])
         return self
@@ -111,13 +110,13 @@ class World(CommandsMixin, ReadingMixin):
     def _run(self, n):
         s, flags = self.state, self._flags
         flags[0], flags[1] = s.has_user_force, s.has_user_torque
-        contacts = (self.contact_system.args() if self.contact_system is not None
-                    else _NO_CONTACTS)
+        contacts, (warm_keys, warm_values), (ints, floats, counts) = (
+            self.contact_system.args() if self.contact_system is not None else _NO_CONTACTS)
         return run_steps(n, self.substeps, self.model.dt, self._code, self._idata,
                          (s.pos, s.quat, s.vel, s.omega, s.awake),
                          (s.user_force, s.user_force_offset, s.user_torque, flags),
                          (self._inv_mass, self.inertia, self.inv_inertia), self._work, contacts,
-                         self._cycles)
+                         warm_keys, warm_values, ints, floats, counts, self._cycles)
 
     def _seconds(self, cycles, steps=1):
         """{stage: seconds} from step_loop's prof slots (divided by `steps`)."""
@@ -130,6 +129,26 @@ class World(CommandsMixin, ReadingMixin):
             for i in self.contact_system.stage_index:
                 out[STAGE_NAMES[i]] = float(cycles[i] * k)
         return out
+
+    @property
+    def contacts(self) -> ContactEvents:
+        """Contact events of the last step (ContactEvents, one row per event)."""
+        if self._contacts is None:
+            self._contacts = (self.contact_system.events() if self.contact_system is not None
+                              else ContactEvents.empty())
+        return self._contacts
+
+    @contacts.setter
+    def contacts(self, events):
+        self._contacts = events
+
+    @property
+    def last_step_profile(self):
+        """Seconds per stage of one step of the last world.step(n) call (its mean)."""
+        if self._last is None:
+            return {}
+        before, steps = self._last
+        return self._seconds(self._cycles - before, steps)
 
     @property
     def profile(self):

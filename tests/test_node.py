@@ -6,6 +6,7 @@ reset world, so the tests do not depend on one another.
 
 import math
 import signal
+import time
 
 import numpy as np
 import pytest
@@ -224,8 +225,14 @@ def test_a_blown_up_state_pauses_until_reset(sim):
     fresh(driver)
     # Finite, but the spin it gives overflows within a few steps.
     send(driver, "/physics/ball/wrench", (0, 0, 0), (0, 0, 1e308))
-    replies = [driver.call(Trigger, "/physics/step") for _ in range(6)]
-    failed = [r for r in replies if not r.success]
+    # step until the step that applies the wrench fails (the wrench reaches the
+    # node when DDS delivers it: wait on that, not on a fixed number of steps)
+    failed, deadline = [], time.monotonic() + 10.0
+    while not failed and time.monotonic() < deadline:
+        reply = driver.call(Trigger, "/physics/step")
+        if not reply.success:
+            failed.append(reply)
+    failed += [r for r in [driver.call(Trigger, "/physics/step")] if not r.success]  # halted now
     assert failed and "reset_simulation" in failed[-1].message
     diagnostics = driver.received["/diagnostics"]
     driver.spin_until(

@@ -41,8 +41,8 @@ class ContactSystem:
         self.cap = np.full(1, 16, np.int64)
 
     def args(self):
-        """The `contacts` argument of step_loop.run_steps."""
-        return (self.cm, self.fp, self.ip, self.sleep, self.warm, self.events_state, self.cap)
+        """(contacts, warm cache, event state): step_loop.run_steps' arguments."""
+        return ((self.cm, self.fp, self.ip, self.sleep, self.cap), self.warm, self.events_state)
 
     def events(self):
         return events_output(self.events_state)
