@@ -16,6 +16,17 @@ def _row_finite(a, i):
 
 
 @njit(cache=True)
+def all_finite(pos, quat, vel, omega):
+    """Whether every body's pose and velocity is finite (allocates nothing: it
+    runs after every stage)."""
+    for i in range(len(pos)):
+        if not (_row_finite(pos, i) and _row_finite(vel, i) and _row_finite(omega, i)
+                and _row_finite(quat, i)):
+            return False
+    return True
+
+
+@njit(cache=True)
 def non_finite_bodies(pos, quat, vel, omega):
     """Indices of the bodies with a NaN or inf in their pose or velocity."""
     bad = np.zeros(len(pos), np.bool_)

@@ -17,7 +17,7 @@ from numba import njit
 from .collision.contact_substep import N_STAGES
 from .collision.contact_substep import run as contact_substep
 from .cycle_clock import cycles
-from .finite import non_finite_bodies
+from .finite import all_finite
 from .integration import integrate_substep
 
 # prof slots: the contact stages first (contact_substep's own indices), then these
@@ -42,7 +42,7 @@ def _integrate(code, h, idata, body, loads, masses, work, prof):
 @njit(cache=True)
 def _finite(body, prof):
     t = cycles()
-    ok = len(non_finite_bodies(body[0], body[1], body[2], body[3])) == 0
+    ok = all_finite(body[0], body[1], body[2], body[3])
     prof[FINITE] += cycles() - t
     return ok
 

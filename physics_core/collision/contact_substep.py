@@ -10,7 +10,7 @@ import numpy as np
 from numba import njit
 
 from ..cycle_clock import cycles
-from ..finite import non_finite_bodies
+from ..finite import all_finite
 from .contact_data import (CCD_ITERATIONS, CCD_ON, CCD_THRESHOLD, CCD_TOLERANCE, MARGIN,
                            SLEEP_ON)
 from .contact_layout import LAM, U0
@@ -26,7 +26,7 @@ STAGE_NAMES = ("ccd", "collide", "solve", "restitution", "correct", "events", "s
 
 @njit(cache=True)
 def _finite(pos, quat, vel, omega):
-    return len(non_finite_bodies(pos, quat, vel, omega)) == 0
+    return all_finite(pos, quat, vel, omega)
 
 
 @njit(cache=True)
