@@ -1,26 +1,30 @@
 """Collision detection and response (COURSE.md 5), as named stages of a substep.
 
-`build_contact_stages(model)` returns the stages the World runs after
-`integrate` in every substep, in this order (Box2D v3's solver stages):
+`ContactSystem(model, params)` (contact_system.py) holds what the stages
+keep; the compiled step loop (physics_core/step_loop.py) runs them after
+`integrate` in every substep through contact_substep.run, in this order
+(Box2D v3's solver stages), each stage a function of contact_stages.py:
 
-    ccd          – (ccd: true) fast bodies: time of impact by bisection along
-                   the substep; a body that hits is moved back to its time of
-                   impact pose, so a thin wall is never crossed
-    collide      – broad and narrow phase at the end-of-substep poses (the
-                   broad phase's pair list is kept between substeps while no
-                   body moves far, pair_cache.py), wake sleeping bodies that
-                   are touched, contact rows, colouring, warm start from last
-                   substep (keyed by feature)
-    solve        – warm start, then projected Gauss–Seidel on normal and
-                   friction impulses with accumulated clamping, one graph
-                   colour (a vectorised batch) at a time
+    ccd          – (ccd: true) fast bodies: time of impact by sampling and
+                   bisection along the substep (time_of_impact.py); a body
+                   that hits is moved back to its time of impact pose
+    collide      – broad phase (grid.py) and narrow phase (shape_pairs.py,
+                   box_pair.py, detection.py) at the end-of-substep poses,
+                   sleeping bodies that are touched woken (sleep_islands.py),
+                   contact rows (contact_build.py, contact_layout.py) warm-
+                   started from last substep by feature key (warm_cache.py)
+    solve        – warm start, then sequential impulses on the normal and
+                   friction impulses, contacts in key order
+                   (sequential_impulses.py)
     restitution  – bounce pass from the approach speed stored before the
-                   solve, zero below restitution_threshold (resting contact)
+                   solve, zero below restitution_threshold (bounce.py)
     correct      – positions follow the velocity change; remaining overlap is
                    pushed out by pseudo-velocities (split impulse) that move
-                   positions only, capped at max_correction_speed
+                   positions only, capped at max_correction_speed (push_out.py)
     events       – contact begin/persist/end, impulses, gathered per step
+                   (event_log.py)
     sleep        – (sleep: true) islands at rest leave the solver
+                   (sleep_islands.py)
 
 Why the contacts are detected after integrating: the integrator moved every
 body with its unconstrained velocity u0; a pair found overlapping (or within
