@@ -16,13 +16,23 @@ of its remaining motion, so there s0 = s_end.
 import numpy as np
 from numba import njit
 
-from ..kernel_math import world_inverse_inertia
+from ..quaternion import row4, to_matrix_one
 from .contact_layout import (ARM_A, ARM_B, BIAS, BODY_A, BODY_B, DEPTH, DIR, E, G_TN, INV_MASS_A,
                              INV_MASS_B, K_A, K_B, LAM, MASS_N, MU, MU_K, MU_S, SLIDING, TURN_A,
                              TURN_B, U0, W_TN, W_TT, W_TT_INV)
 
 RESTITUTION_RULES = {"effective_mass": 0, "mean": 1, "min": 2, "max": 3}
 _TINY = 1e-30
+
+
+@njit(cache=True)
+def world_inverse_inertia(q, inv_inertia, out):
+    """out (3, 3) = I_w⁻¹ = R diag(I⁻¹) Rᵀ (COURSE.md 3)."""
+    R = to_matrix_one(q)
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = (R[i][0] * inv_inertia[0] * R[j][0] + R[i][1] * inv_inertia[1] * R[j][1]
+                         + R[i][2] * inv_inertia[2] * R[j][2])
 
 
 @njit(cache=True)
@@ -123,10 +133,10 @@ def build_rows(R, I, a, b, point, normal, depth, pos, quat, vel, omega, inv_mass
         I[c, BODY_A], I[c, BODY_B], I[c, SLIDING] = i, j, 0
         tangent_frame(R, c, normal[c, 0], normal[c, 1], normal[c, 2])
         R[c, INV_MASS_A], R[c, INV_MASS_B] = inv_mass[i], inv_mass[j]
-        world_inverse_inertia(quat[i], inv_inertia[i], iw)
+        world_inverse_inertia(row4(quat, i), inv_inertia[i], iw)
         lever_arms(R, c, ARM_A, TURN_A, point[c, 0] - pos[i, 0], point[c, 1] - pos[i, 1],
                    point[c, 2] - pos[i, 2], iw)
-        world_inverse_inertia(quat[j], inv_inertia[j], iw)
+        world_inverse_inertia(row4(quat, j), inv_inertia[j], iw)
         lever_arms(R, c, ARM_B, TURN_B, point[c, 0] - pos[j, 0], point[c, 1] - pos[j, 1],
                    point[c, 2] - pos[j, 2], iw)
         effective_masses(R, c)

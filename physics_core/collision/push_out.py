@@ -17,7 +17,7 @@ a box out of the floor whenever one corner's push is larger than another's.
 import numpy as np
 from numba import njit
 
-from ..kernel_math import turn_quaternion
+from ..quaternion import integrate_one, row4
 from .contact_layout import (ARM_A, ARM_B, BODY_A, BODY_B, DEPTH, DIR, INV_MASS_A, INV_MASS_B)
 
 
@@ -116,7 +116,8 @@ def move_bodies(pos, quat, dV, X, h):
         for j in range(3):
             pos[i, j] += (dV[i, j] + X[i, j]) * h if X.shape[0] else dV[i, j] * h
         if dV[i, 3] != 0.0 or dV[i, 4] != 0.0 or dV[i, 5] != 0.0:
-            turn_quaternion(quat[i], dV[i, 3], dV[i, 4], dV[i, 5], h, quat[i])
+            q = integrate_one(row4(quat, i), (dV[i, 3], dV[i, 4], dV[i, 5]), h)
+            quat[i, 0], quat[i, 1], quat[i, 2], quat[i, 3] = q
 
 
 @njit(cache=True)

@@ -35,7 +35,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..kernel_math import rotation_matrix
+from ..quaternion import row4, to_matrix_one
 from ..shapes import BOX, PLANE, SPHERE
 from .detection import depth_scratch, signed_depth
 from .geometry import HALF, NORMAL, OFFSET, RADIUS
@@ -84,16 +84,15 @@ def fast_bodies(kind, dims, reach, moving, p0, q0, pos, quat, threshold):
 @njit(cache=True)
 def swept_box(kind, dims, reach, i, p0, q0, pos, quat, margin, box):
     """box[0:3], box[3:6]: lower and upper corners holding body i over the substep."""
-    R = np.empty((3, 3))
+    R = to_matrix_one(row4(quat, i))
     for j in range(3):
         half = reach[i]
         if kind[i] == SPHERE:
             half = dims[i, RADIUS]
         elif kind[i] == BOX and q0[i, 0] == quat[i, 0] and q0[i, 1] == quat[i, 1] \
                 and q0[i, 2] == quat[i, 2] and q0[i, 3] == quat[i, 3]:
-            rotation_matrix(quat[i], R)
-            half = (abs(R[j, 0]) * dims[i, HALF] + abs(R[j, 1]) * dims[i, HALF + 1]
-                    + abs(R[j, 2]) * dims[i, HALF + 2])
+            half = (abs(R[j][0]) * dims[i, HALF] + abs(R[j][1]) * dims[i, HALF + 1]
+                    + abs(R[j][2]) * dims[i, HALF + 2])
         half += 0.5 * margin
         box[j] = min(p0[i, j], pos[i, j]) - half
         box[3 + j] = max(p0[i, j], pos[i, j]) + half
@@ -268,18 +267,16 @@ def pair_impact(i, j, kind, dims, reach, p0, q0, pos, quat, margin, threshold, i
 @njit(cache=True)
 def rewind(i, t, p0, q0, pos, quat, omega):
     """Body i back at its pose at t, with the same body-frame angular velocity."""
-    R1 = np.empty((3, 3))
-    Rt = np.empty((3, 3))
-    rotation_matrix(quat[i], R1)
+    R1 = to_matrix_one(row4(quat, i))
     wb = np.empty(3)
     for k in range(3):
-        wb[k] = R1[0, k] * omega[i, 0] + R1[1, k] * omega[i, 1] + R1[2, k] * omega[i, 2]
+        wb[k] = R1[0][k] * omega[i, 0] + R1[1][k] * omega[i, 1] + R1[2][k] * omega[i, 2]
     q = np.empty(4)
     pose_at(i, t, p0, q0, pos, quat, pos[i], q)
     quat[i] = q
-    rotation_matrix(q, Rt)
+    Rt = to_matrix_one(row4(quat, i))
     for k in range(3):
-        omega[i, k] = Rt[k, 0] * wb[0] + Rt[k, 1] * wb[1] + Rt[k, 2] * wb[2]
+        omega[i, k] = Rt[k][0] * wb[0] + Rt[k][1] * wb[1] + Rt[k][2] * wb[2]
 
 
 @njit(cache=True)
