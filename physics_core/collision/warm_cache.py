@@ -12,6 +12,7 @@ pass's extra push is not kept: it belongs to one impact, not to the load.
 import numpy as np
 from numba import njit
 
+from .contact_data import WARM_COLS, WARM_FRICTION, WARM_NORMAL, WARM_SLIP
 from .contact_layout import DIR, LAM, MU, MU_K, MU_S, SLIDING
 
 
@@ -27,10 +28,10 @@ def load_warm(R, I, key, old_key, old, fraction, static_speed):
             j += 1
         slip = np.nan
         if j < m and old_key[j] == key[c]:
-            slip = old[j, 4]
+            slip = old[j, WARM_SLIP]
             if fraction > 0.0:
-                f0, f1, f2 = old[j, 1], old[j, 2], old[j, 3]
-                R[c, LAM] = old[j, 0] * fraction
+                f0, f1, f2 = old[j, WARM_FRICTION], old[j, WARM_FRICTION + 1], old[j, WARM_FRICTION + 2]
+                R[c, LAM] = old[j, WARM_NORMAL] * fraction
                 R[c, LAM + 1] = (f0 * R[c, DIR + 3] + f1 * R[c, DIR + 4] + f2 * R[c, DIR + 5]) * fraction
                 R[c, LAM + 2] = (f0 * R[c, DIR + 6] + f1 * R[c, DIR + 7] + f2 * R[c, DIR + 8]) * fraction
         sliding = slip > static_speed      # NaN (a new contact): held
@@ -46,11 +47,12 @@ def warm_load(R, I, key, cache_keys, cache_values, fraction, static_speed):
 @njit(cache=True)
 def warm_store(cache_keys, cache_values, key, R, friction, slip):
     """Keep this substep's impulses, friction vectors and slip speeds by key."""
-    values = np.empty((len(key), 5))
+    values = np.empty((len(key), WARM_COLS))
     for c in range(len(key)):
-        values[c, 0] = R[c, LAM]
-        values[c, 1], values[c, 2], values[c, 3] = friction[c, 0], friction[c, 1], friction[c, 2]
-        values[c, 4] = slip[c]
+        values[c, WARM_NORMAL] = R[c, LAM]
+        for i in range(3):
+            values[c, WARM_FRICTION + i] = friction[c, i]
+        values[c, WARM_SLIP] = slip[c]
     cache_keys[0] = key.copy()
     cache_values[0] = values
 
@@ -58,7 +60,7 @@ def warm_store(cache_keys, cache_values, key, R, friction, slip):
 @njit(cache=True)
 def warm_clear(cache_keys, cache_values):
     cache_keys[0] = np.zeros(0, np.int64)
-    cache_values[0] = np.zeros((0, 5))
+    cache_values[0] = np.zeros((0, WARM_COLS))
 
 
 @njit(cache=True)
