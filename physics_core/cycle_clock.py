@@ -3,7 +3,8 @@
 Numba's nopython mode has no time function, yet every stage of the
 compiled step is timed into `world.profile`. `cycles()` reads the counter
 (LLVM's readcyclecounter: the TSC on x86, a few nanoseconds) and
-`SECONDS_PER_CYCLE` converts, measured once against time.perf_counter.
+`seconds_per_cycle()` converts, measured against time.perf_counter the first
+time a profile is read (a 20 ms measurement no process start should pay).
 Where the processor has no such counter it reads 0 and the profile stays
 empty; the physics does not depend on it.
 """
@@ -36,4 +37,10 @@ def _calibrate(seconds=0.02):
     return (t1 - t0) / (c1 - c0) if c1 > c0 else 0.0
 
 
-SECONDS_PER_CYCLE = _calibrate()
+_SECONDS_PER_CYCLE = []
+
+
+def seconds_per_cycle() -> float:
+    if not _SECONDS_PER_CYCLE:
+        _SECONDS_PER_CYCLE.append(_calibrate())
+    return _SECONDS_PER_CYCLE[0]

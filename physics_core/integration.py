@@ -37,7 +37,7 @@ allocates nothing:
     quat: RK4's stage orientation; y: RK4's y0 and k₁ + 2 k₂ + 2 k₃
 
 `prof` int64 (N_EFFECTS,) (integration_profile()): cycles (cycle_clock.cycles, times
-cycle_clock.SECONDS_PER_CYCLE for seconds) spent in each effect, added to;
+cycle_clock.seconds_per_cycle() for seconds) spent in each effect, added to;
 an empty array turns the timing off.
 
 Integrator codes: INTEGRATOR_CODES maps the scene names to EXPLICIT_EULER,

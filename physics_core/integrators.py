@@ -23,7 +23,7 @@ import weakref
 import numpy as np
 
 from . import free_rotation
-from .cycle_clock import SECONDS_PER_CYCLE
+from .cycle_clock import seconds_per_cycle
 from .integration import (EFFECT_NAMES, FLAGS, INTEGRATOR_CODES, can_make_torque, integrate_substep,
                           integration_data, integration_profile, integration_work)
 
@@ -86,7 +86,7 @@ def _substep(code, sys, h):
     prof = getattr(sys, "_prof", None)
     if prof is not None:
         for e, key in p.timed:
-            prof[key] = prof.get(key, 0.0) + float(p.prof[e]) * SECONDS_PER_CYCLE
+            prof[key] = prof.get(key, 0.0) + float(p.prof[e]) * seconds_per_cycle()
 
 
 def explicit_euler(sys, h):

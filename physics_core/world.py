@@ -29,7 +29,7 @@ from .body_set import parse_new_body, with_body, without_body
 from .body_view import BodyView
 from .collision.contact_substep import STAGE_NAMES
 from .contact_events import ContactEvents
-from .cycle_clock import SECONDS_PER_CYCLE
+from .cycle_clock import seconds_per_cycle
 from .effects.springs import stable_substeps
 from .errors import CommandError, NonFiniteStateError
 from .finite import non_finite_bodies
@@ -120,7 +120,7 @@ class World(CommandsMixin, ReadingMixin):
 
     def _seconds(self, cycles, steps=1):
         """{stage: seconds} from step_loop's prof slots (divided by `steps`)."""
-        k = SECONDS_PER_CYCLE / steps
+        k = seconds_per_cycle() / steps
         out = {"integrate": float(cycles[INTEGRATE] * k), "finite": float(cycles[FINITE] * k)}
         for e, name in enumerate(EFFECT_NAMES):
             if name in self._effects:
