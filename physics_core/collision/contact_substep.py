@@ -87,7 +87,10 @@ def run(cm, fp, ip, s, masses, p0, q0, sleep, warm, events, h, dt, first, last, 
     t = cycles()
     contacts, R, I, k = _collide(cm, fp, ip, s, masses, sleep, warm, toi, h, cap[0])
     cap[0] = k + k // 8 + 4
-    vel0, omega0 = vel.copy(), omega.copy()
+    # with no contact and no body moved back, the solve changes no velocity
+    # and the correct stage has nothing to move: it is skipped
+    moves = len(R) > 0 or (toi >= 0.0).any()
+    vel0, omega0 = (vel.copy(), omega.copy()) if moves else (vel[:0], omega[:0])
     prof[COLLIDE] += cycles() - t
     t = cycles()
     friction, _ = solve_stage(fp, ip, R, I, contacts[5], vel, omega, warm)
@@ -100,7 +103,8 @@ def run(cm, fp, ip, s, masses, p0, q0, sleep, warm, events, h, dt, first, last, 
     if not _finite(pos, quat, vel, omega):
         return RESTITUTION
     t = cycles()
-    _correct(cm, fp, ip, R, I, s, vel0, omega0, target, tau, toi, h)
+    if moves:
+        _correct(cm, fp, ip, R, I, s, vel0, omega0, target, tau, toi, h)
     prof[CORRECT] += cycles() - t
     if not _finite(pos, quat, vel, omega):
         return CORRECT
