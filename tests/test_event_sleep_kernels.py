@@ -501,7 +501,7 @@ def test_rest_speed_is_summed_as_sleep_py_sums_it():
         if e != s and lin * lin == max(e, s):
             break
     else:
-        pytest.skip("no speed at the threshold found")
+        raise AssertionError("no speed at the threshold in 100,000 draws of seed 7")
     params = SimpleNamespace(sleep_time=2.5 / 240.0, sleep_linear_speed=lin,
                              sleep_angular_speed=1.0)
     is_static = np.array([True, False])

@@ -298,12 +298,6 @@ def test_recording_copy_is_stable(session, tmp_path):
 def test_default_scene_session_with_contacts_resimulates_exactly(tmp_path):
     """What `make run` does, for 0.8 s of sim time: the built-in scene (bodies
     falling, bouncing and hanging from a spring), recorded and re-run."""
-    from physics_core import default_scene_path, load_scene
-
-    try:
-        load_scene(default_scene_path())
-    except NotImplementedError as exc:
-        pytest.skip(f"engine feature missing: {exc}")
     path = tmp_path / "recordings" / "session.mcap"
     with NodeProcess(["--record", path, "--rtf", "0", "--duration", "0.8"], tmp_path, isolated=True) as node:
         assert node.wait(60.0) == 0, node.log()

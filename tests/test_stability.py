@@ -5,8 +5,8 @@
 - 10⁵ steps of an eccentric orbit keep the energy error bounded (no drift);
 - random passive scenes without contacts never produce NaN, never gain
   energy beyond ENERGY_GAIN_TOLERANCE, and isolated ones keep their momentum;
-- every contact hard case of scenes/ stays finite and bounded (skipped while
-  the engine has no contacts).
+- every contact hard case of scenes/ stays finite and bounded (a case that
+  cannot be built or stepped fails).
 
 The measurements live in benchmarks/stability_cases.py so that
 `physics-bench stability` reports exactly what these tests assert.
@@ -20,7 +20,6 @@ from hypothesis import strategies as st
 from benchmarks import hard_cases
 from benchmarks import random_scenes as rs
 from benchmarks import stability_cases as sc
-from benchmarks.contact_support import available as contacts_available
 
 STABLE_INTEGRATORS = ("semi_implicit_euler", "velocity_verlet", "rk4")
 ALL_INTEGRATORS = ("explicit_euler",) + STABLE_INTEGRATORS
@@ -90,9 +89,6 @@ def test_random_sweep_seeds_are_reproducible():
 # ---- contact hard cases ------------------------------------------------------------
 @pytest.mark.parametrize("case", hard_cases.discover(), ids=lambda c: c.name)
 def test_hard_case_stays_bounded(case):
-    ok, why = contacts_available()
-    if not ok:
-        pytest.skip(f"contacts not available: {why}")
     r = hard_cases.run(case, duration=hard_cases.TEST_DURATION)
     assert r.finite, f"{case.name}: non-finite state"
     failures = r.failures()
