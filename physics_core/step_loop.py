@@ -14,6 +14,7 @@ bodies; the state is left as that stage made it).
 import numpy as np
 from numba import njit
 
+from .borrowed import borrow, keep_alive
 from .collision.contact_substep import N_STAGES
 from .collision.contact_substep import run as contact_substep
 from .cycle_clock import cycles
@@ -54,7 +55,8 @@ def _one_step(substeps, dt, code, idata, body, loads, masses, work, contacts, pr
     cm, fp, ip, sleep, warm, events, cap = contacts
     h = dt / substeps
     for sub in range(substeps):
-        p0, q0 = pos.copy(), quat.copy()
+        start = (pos.copy(), quat.copy())
+        p0, q0 = borrow(start)
         _integrate(code, h, idata, body, loads, masses, work, prof)
         if not _finite(body, prof):
             return FAILED_INTEGRATE
@@ -64,6 +66,7 @@ def _one_step(substeps, dt, code, idata, body, loads, masses, work, contacts, pr
                                      prof)
             if failed >= 0:
                 return failed
+        keep_alive(start)
     return -1
 
 
@@ -75,9 +78,10 @@ def run_steps(n, substeps, dt, code, idata, body, loads, masses, work, contacts,
     cache and the event log's typed lists come as arguments of their own
     (numba types a tuple holding typed lists anew on every call, which costs
     tens of microseconds; alone, a list costs well under one)."""
-    cm, fp, ip, sleep, cap = contacts
+    cm, fp, ip, sleep, cap = borrow(contacts)
     packed = (cm, fp, ip, sleep, (warm_keys, warm_values),
               (event_ints, event_floats, event_counts), cap)
+    idata, body, loads, masses, work, prof = borrow((idata, body, loads, masses, work, prof))
     for k in range(n):
         failed = _one_step(substeps, dt, code, idata, body, loads, masses, work, packed, prof)
         if failed >= 0:

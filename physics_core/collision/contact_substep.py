@@ -9,6 +9,7 @@ finite (the caller names it and the bodies).
 import numpy as np
 from numba import njit
 
+from ..borrowed import borrow, keep_alive
 from ..cycle_clock import cycles
 from ..finite import all_finite
 from .contact_data import (CCD_ITERATIONS, CCD_ON, CCD_THRESHOLD, CCD_TOLERANCE, MARGIN,
@@ -75,7 +76,10 @@ def run(cm, fp, ip, s, masses, p0, q0, sleep, warm, events, h, dt, first, last, 
     quat, vel, omega, awake); masses = the solver's (inv_mass, inv_inertia),
     updated here when bodies wake or sleep; cap[0]: row-count guess, updated."""
     pos, quat, vel, omega, awake = s
-    toi = np.full(len(pos), -1.0)
+    # the arrays made here are passed down borrowed (borrowed.py) and kept
+    # alive by the keep_alive at the end
+    toi_owned = np.full(len(pos), -1.0)
+    toi = borrow(toi_owned)
     if first:
         events_reset(events)
     if ip[CCD_ON]:
@@ -85,20 +89,24 @@ def run(cm, fp, ip, s, masses, p0, q0, sleep, warm, events, h, dt, first, last, 
         if not _finite(pos, quat, vel, omega):
             return CCD
     t = cycles()
-    contacts, R, I, k = _collide(cm, fp, ip, s, masses, sleep, warm, toi, h, cap[0])
+    made = _collide(cm, fp, ip, s, masses, sleep, warm, toi, h, cap[0])
+    contacts, R, I, k = borrow(made)
     cap[0] = k + k // 8 + 4
     # with no contact and no body moved back, the solve changes no velocity
     # and the correct stage has nothing to move: it is skipped
     moves = len(R) > 0 or (toi >= 0.0).any()
-    vel0, omega0 = (vel.copy(), omega.copy()) if moves else (vel[:0], omega[:0])
+    before = (vel.copy(), omega.copy()) if moves else (vel[:0], omega[:0])
+    vel0, omega0 = borrow(before)
     prof[COLLIDE] += cycles() - t
     t = cycles()
-    friction, _ = solve_stage(fp, ip, R, I, contacts[5], vel, omega, warm)
+    solved = solve_stage(fp, ip, R, I, contacts[5], vel, omega, warm)
+    friction = borrow(solved[0])
     prof[SOLVE] += cycles() - t
     if not _finite(pos, quat, vel, omega):
         return SOLVE
     t = cycles()
-    target, tau = restitution_stage(fp, R, I, vel, omega, h)
+    bounced = restitution_stage(fp, R, I, vel, omega, h)
+    target, tau = borrow(bounced)
     prof[RESTITUTION] += cycles() - t
     if not _finite(pos, quat, vel, omega):
         return RESTITUTION
@@ -109,11 +117,18 @@ def run(cm, fp, ip, s, masses, p0, q0, sleep, warm, events, h, dt, first, last, 
     if not _finite(pos, quat, vel, omega):
         return CORRECT
     t = cycles()
-    _events(events, contacts, R, friction, moving_bodies(cm.is_static, awake), last)
+    moving = moving_bodies(cm.is_static, awake)
+    _events(events, contacts, R, friction, borrow(moving), last)
     prof[EVENTS] += cycles() - t
     if last and ip[SLEEP_ON]:
         t = cycles()
         if sleep_stage(cm, fp, R, I, awake, vel, omega, sleep, dt):
             solver_masses(cm, awake, masses[0], masses[1])
         prof[SLEEP] += cycles() - t
+    keep_alive(toi_owned)
+    keep_alive(made)
+    keep_alive(before)
+    keep_alive(solved)
+    keep_alive(bounced)
+    keep_alive(moving)
     return -1
