@@ -10,6 +10,7 @@ cache, the sleep state and the event log's state.
 import numpy as np
 from numba import njit
 
+from ..borrowed import borrow
 from .bounce import bounce_targets
 from .contact_build import build_rows
 from .contact_data import (CCD_ITERATIONS, CCD_THRESHOLD, CCD_TOLERANCE, CORRECTION_RATE,
@@ -90,12 +91,12 @@ def detect_stage(cm, fp, ip, pos, quat, awake, sleep, cap):
 def rows_stage(cm, fp, ip, contacts, pos, quat, vel, omega, inv_mass, inv_inertia, warm, toi, h):
     """The contact rows (R, I) of the detected contacts, warm-started from the cache."""
     a, b, point, normal, depth, key = contacts
-    R = np.empty((len(a), NCOL))
-    I = np.empty((len(a), ICOL), np.int64)
+    made = (np.empty((len(a), NCOL)), np.empty((len(a), ICOL), np.int64))
+    R, I = borrow(made)                            # physics_core/borrowed.py
     build_rows(R, I, a, b, point, normal, depth, pos, quat, vel, omega, inv_mass, inv_inertia,
                cm.material, cm.mu_static, cm.mu_kinetic, cm.restitution, ip[RULE], h, toi)
     warm_load(R, I, key, warm[0], warm[1], fp[WARM_FRACTION], fp[STATIC_SPEED])
-    return R, I
+    return made
 
 
 @njit(cache=True)

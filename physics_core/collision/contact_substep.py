@@ -39,8 +39,8 @@ def _collide(cm, fp, ip, s, masses, sleep, warm, toi, h, cap):
     if woke:
         solver_masses(cm, awake, masses[0], masses[1])
     contacts = (a, b, point, normal, depth, key)
-    R, I = rows_stage(cm, fp, ip, contacts, pos, quat, vel, omega, masses[0], masses[1], warm,
-                      toi, h)
+    R, I = rows_stage(cm, fp, ip, borrow(contacts), pos, quat, vel, omega, masses[0], masses[1],
+                      warm, toi, h)
     return contacts, R, I, k
 
 

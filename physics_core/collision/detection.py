@@ -21,6 +21,7 @@ reference-count updates that can cost more than a sphere pair's arithmetic.
 import numpy as np
 from numba import njit
 
+from ..borrowed import borrow, keep_alive
 from ..errors import NonFiniteStateError
 from .box_pair import box_box, separation, workspace
 from .geometry import BOX, PLANE, Geometry
@@ -163,9 +164,14 @@ def detect_arrays(kind, dims, is_static, reach, pos, quat, margin, cap):
         pairs = np.zeros((0, 2), np.int64)
         rows, row_pair, k = narrow_rows(pairs, kind, dims, pos, quat, margin, 0)
         return manifold_arrays(rows, row_pair, k, pairs, margin, len(kind)), -1
-    pairs = candidate_pairs(kind, dims, is_static, reach, pos, quat, margin)
-    rows, row_pair, k = narrow_rows(pairs, kind, dims, pos, quat, margin, cap)
-    return manifold_arrays(rows, row_pair, k, pairs, margin, len(kind)), k
+    pairs_owned = candidate_pairs(kind, dims, is_static, reach, pos, quat, margin)
+    pairs = borrow(pairs_owned)                   # physics_core/borrowed.py
+    found = narrow_rows(pairs, kind, dims, pos, quat, margin, cap)
+    rows, row_pair, k = borrow(found)
+    out = manifold_arrays(rows, row_pair, k, pairs, margin, len(kind))
+    keep_alive(found)
+    keep_alive(pairs_owned)
+    return out, k
 
 
 class Detector:

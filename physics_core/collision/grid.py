@@ -32,6 +32,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ..borrowed import borrow, keep_alive
 from .geometry import (BOX, HALF, NORMAL, OFFSET, PLANE, RADIUS, dot_lanes, dot_seq, fma,
                        quat_matrix)
 
@@ -280,8 +281,12 @@ def _grid_pairs(cols, ids, small, cell, is_static, pairs, k):
         order, first, cells = _sparse_index(keys)
     rows = small[order]                       # rows in cell order: neighbours close in memory
     body = ids[rows]
-    return _sweep_cells(cols[rows], body, is_static[body], keys[order], first, cells,
-                        forward_offsets(dims), pairs, k)
+    # the sweep's inputs made here go down borrowed (physics_core/borrowed.py)
+    owned = (cols[rows], body, is_static[body], keys[order], first, cells, forward_offsets(dims))
+    sc, body_b, static, key, first_b, cells_b, fwd = borrow(owned)
+    out = _sweep_cells(sc, body_b, static, key, first_b, cells_b, fwd, pairs, k)
+    keep_alive(owned)
+    return out
 
 
 @njit(cache=True)
@@ -458,15 +463,26 @@ def finite_poses(kind, pos, quat):
 def candidate_pairs(kind, dims, is_static, reach, pos, quat, margin):
     """(k, 2) int64 pairs (a, b) in Manifold order, sorted by pair id; the
     poses must be finite (finite_poses)."""
-    solid = np.flatnonzero(kind != PLANE)
+    solid_owned = np.flatnonzero(kind != PLANE)
+    solid = borrow(solid_owned)                  # borrowed (physics_core/borrowed.py)
     pairs = np.empty((max(16, 4 * len(kind)), 2), np.int64)
     k = 0
     if len(solid) >= 2:
-        cols = solid_table(kind, dims, reach, pos, quat, margin, solid)
-        small, large, cell = _classify(cols)
+        classes = _classes(kind, dims, reach, pos, quat, margin, solid)
+        cols, small, large, cell = borrow(classes)
         if len(small) >= 2:
             pairs, k = _grid_pairs(cols, solid, small, cell, is_static, pairs, k)
         if len(large):
             pairs, k = _large_pairs(cols, solid, large, small, cell, is_static, pairs, k)
+        keep_alive(classes)
     pairs, k = _plane_pairs(kind, dims, is_static, pos, quat, margin, pairs, k)
+    keep_alive(solid_owned)
     return sort_pairs(pairs, k, len(kind))
+
+
+@njit(cache=True)
+def _classes(kind, dims, reach, pos, quat, margin, solid):
+    """(solid table, small rows, large rows, cell edge) of the solid bodies."""
+    cols = solid_table(kind, dims, reach, pos, quat, margin, solid)
+    small, large, cell = _classify(cols)
+    return cols, small, large, cell
