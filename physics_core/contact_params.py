@@ -25,6 +25,8 @@ class ContactParams:
     restitution_ramp: float = 0.0        # m/s; C_R grows linearly from 0 over this band above the
                                          # threshold (0: switched on at once)
     restitution_combine: str = "effective_mass"   # how two bodies' C_R make the pair's (collision/restitution.py)
+    restitution_iterations: int = 32     # sweeps of the collision pass at most: pairwise bounces are
+                                         # repeated until no contact approaches faster than the threshold
     # -- position correction (split impulse: moves positions, adds no velocity) --
     position_iterations: int = 4         # sweeps of the position (pseudo-velocity) solver per (sub)step
     slop: float = 0.005                  # m; penetration left alone (keeps resting contacts warm)
@@ -61,6 +63,8 @@ def parse_contacts(r) -> ContactParams:
         restitution_ramp=r.number("restitution_ramp", d.restitution_ramp, min=0.0),
         restitution_combine=r.string("restitution_combine", d.restitution_combine,
                                      choices=RESTITUTION_COMBINES),
+        restitution_iterations=r.number("restitution_iterations", d.restitution_iterations, min=0,
+                                        max=1000, integer=True),
         position_iterations=r.number("position_iterations", d.position_iterations, min=0, max=1000,
                                      integer=True),
         slop=r.number("slop", d.slop, min=0.0),

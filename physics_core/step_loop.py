@@ -55,13 +55,13 @@ def _one_step(substeps, dt, code, idata, body, loads, masses, work, contacts, pr
     cm, fp, ip, sleep, warm, events, cap = contacts
     h = dt / substeps
     for sub in range(substeps):
-        start = (pos.copy(), quat.copy())
-        p0, q0 = borrow(start)
+        start = (pos.copy(), quat.copy(), body[2].copy(), body[3].copy())
+        borrowed_start = borrow(start)
         _integrate(code, h, idata, body, loads, masses, work, prof)
         if not _finite(body, prof):
             return FAILED_INTEGRATE
         if len(cm.kind):
-            failed = contact_substep(cm, fp, ip, body, (masses[0], masses[2]), p0, q0, sleep,
+            failed = contact_substep(cm, fp, ip, body, (masses[0], masses[2]), borrowed_start, sleep,
                                      warm, events, h, dt, sub == 0, sub == substeps - 1, cap,
                                      prof)
             if failed >= 0:

@@ -22,7 +22,8 @@ def test_empty_contacts_gives_the_documented_defaults():
 def test_every_key_is_read():
     values = dict(iterations=12, velocity_tolerance=0.0, static_friction_speed=0.02,
                   warm_start=0.5, margin=0.01, restitution_threshold=1.0, restitution_ramp=0.5,
-                  restitution_combine="max", position_iterations=2, slop=0.001, correction_rate=0.5,
+                  restitution_combine="max", restitution_iterations=5, position_iterations=2,
+                  slop=0.001, correction_rate=0.5,
                   max_correction_speed=2.0, ccd=False, ccd_threshold=1.0, ccd_iterations=10,
                   ccd_tolerance=1e-3, sleep=False, sleep_linear_speed=0.1, sleep_angular_speed=0.2,
                   sleep_time=1.0)
@@ -45,7 +46,7 @@ def test_bad_values_are_rejected_with_their_key_path(key, value):
 def test_stages_follow_the_switches():
     names = load_scene(scene({})).stage_names
     assert [n for n in names if n in ("ccd", "collide", "solve", "restitution", "correct", "events", "sleep")] == \
-        ["ccd", "collide", "solve", "restitution", "correct", "events", "sleep"]
+        ["ccd", "collide", "restitution", "solve", "correct", "events", "sleep"]
     names = load_scene(scene({"ccd": False, "sleep": False})).stage_names
     assert "ccd" not in names and "sleep" not in names
 

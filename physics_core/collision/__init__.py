@@ -2,8 +2,8 @@
 
 `ContactSystem(model, params)` (contact_system.py) holds what the stages
 keep; the compiled step loop (physics_core/step_loop.py) runs them after
-`integrate` in every substep through contact_substep.run, in this order
-(Box2D v3's solver stages), each stage a function of contact_stages.py:
+`integrate` in every substep through contact_substep.run, in this order,
+each stage a function of contact_stages.py:
 
     ccd          – (ccd: true) fast bodies: time of impact by sampling and
                    bisection along the substep (time_of_impact.py); a body
@@ -13,11 +13,12 @@ keep; the compiled step loop (physics_core/step_loop.py) runs them after
                    sleeping bodies that are touched woken (sleep_islands.py),
                    contact rows (contact_build.py, contact_layout.py) warm-
                    started from last substep by feature key (warm_cache.py)
-    solve        – warm start, then sequential impulses on the normal and
-                   friction impulses, contacts in key order
-                   (sequential_impulses.py)
-    restitution  – bounce pass from the approach speed stored before the
-                   solve, zero below restitution_threshold (bounce.py)
+    restitution  – the collision pass: pairwise bounces with C_R and friction
+                   on the bounce impulse, swept until no contact approaches
+                   faster than restitution_threshold (bounce.py)
+    solve        – sequential impulses on the normal and friction impulses,
+                   contacts in key order (sequential_impulses.py): resting
+                   contact and whatever the pass left
     correct      – positions follow the velocity change; remaining overlap is
                    pushed out by pseudo-velocities (split impulse) that move
                    positions only, capped at max_correction_speed (push_out.py)

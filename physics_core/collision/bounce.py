@@ -1,19 +1,42 @@
-"""Restitution: the bounce pass after the solve (COURSE.md 5, coefficient of restitution).
+"""Restitution: the collision pass, before the contact solve (COURSE.md 5,
+coefficient of restitution, friction).
 
-Driven by the approach speed stored before the solve, u0_n < 0 (Box2D's
-restitution stage): a contact that was pushed (λ_n > 0) and approached
-faster than `restitution_threshold` is driven to the separation speed
-C_R × approach. Below the threshold C_R is 0 (resting contact: a box lying
-on the floor does not jitter); with `restitution_ramp` > 0 it rises linearly
-from 0 over that band instead.
+Contacts are visited in key order, sweep after sweep. A contact whose
+normal velocity approaches faster than `restitution_threshold`, and whose
+surfaces meet within the substep, gets the course's pairwise impulse
+
+    j = (1 + C_R) (−u_n) / W_00      (W_00 = 1/m_a + 1/m_b + rotational terms)
+
+so that it separates at C_R × its approach speed, and friction acts on that
+same impulse: kinetic μ_k j against the slip, or, when the impulse that
+stops the slip lies within μ_s j, exactly that impulse (the contact grips).
+Sweeps repeat until no contact approaches (at most
+`restitution_iterations`): a ball that hits a row of touching balls passes
+the blow along the row pair by pair, as elastic collisions do, so C_R = 1
+without friction keeps the kinetic energy and C_R's definition holds
+contact by contact. What still approaches after the pass, and everything
+slower than the threshold (resting contact, C_R = 0), and every impact
+with C_R = 0 (all of a manifold's points are stopped together there), is
+left to the sequential-impulse solve. With `restitution_ramp` > 0, C_R rises linearly
+from 0 over that band above the threshold.
+
+The pass's impulses J (normal, two tangents) are kept apart from the
+solve's accumulated λ, which they would otherwise cancel (the solve drives
+a separating contact's λ back to 0), and added to λ after the solve for the
+events and the sleep islands; the warm start uses the solve's λ only.
 
 Time of collision (COURSE.md 5): the surfaces met a fraction τ of the
 substep in, where s0 = approach·h − depth had closed; the bodies move with
 the old velocity until then and with the new one after (push_out.py).
 """
+import math
+
 from numba import njit
 
-from .contact_layout import DEPTH, E, LAM, U0
+from .contact_build import row_velocity
+from .contact_layout import (BODY_A, BODY_B, DEPTH, DIR, E, LAM, MASS_N, MU_K, MU_S, U0,
+                             W_TT_INV)
+from .sequential_impulses import apply_impulse
 
 
 @njit(cache=True)
@@ -25,20 +48,118 @@ def effective_restitution(e, approach, threshold, ramp):
 
 
 @njit(cache=True)
-def bounce_targets(R, threshold, ramp, h, target, tau):
-    """target[c] = C_R × approach where contact c bounces (else 0) and its time
-    of impact τ as a fraction of the substep; returns how many bounce."""
-    count = 0
+def impact(u_start, u_end, depth, h):
+    """(u_n at the impact, τ) for a contact whose normal velocity went from
+    u_start to u_end over the substep under the forces (constant
+    acceleration a = (u_end − u_start)/h) and whose surfaces overlap by
+    `depth` at its end: the gap at the start s0 = −depth − h (u_start + u_end)/2
+    closes at u_imp = −√(u_start² − 2 a s0) (COURSE.md 3, uniformly
+    accelerated motion), τ the fraction of the substep by then. A pair
+    already touching at the start (s0 ≤ 0) has τ = 0 and u_imp = u_start."""
+    s0 = -depth - 0.5 * h * (u_start + u_end)
+    if not s0 > 0.0:
+        return u_start, 0.0
+    a = (u_end - u_start) / h
+    u_imp = -math.sqrt(max(u_start * u_start - 2.0 * a * s0, 0.0))
+    if abs(a) * h > 1e-12 * (abs(u_start) + abs(u_end)):
+        tau = (u_imp - u_start) / (a * h)
+    else:
+        tau = s0 / max(-u_start * h, 1e-300)
+    tau = min(max(tau, 0.0), 1.0)
+    return u_start + tau * (u_end - u_start), tau
+
+
+@njit(cache=True)
+def bounce_friction(R, c, a, b, jn, vel, omega):
+    """Friction on a bounce impulse jn (COURSE.md 5): the tangential impulse
+    that stops the slip if it lies within μ_s jn, else μ_k jn against the
+    slip. Returns the two tangential impulses applied."""
+    u1 = row_velocity(R, c, 1, a, b, vel, omega)
+    u2 = row_velocity(R, c, 2, a, b, vel, omega)
+    s1 = -(R[c, W_TT_INV] * u1 + R[c, W_TT_INV + 1] * u2)
+    s2 = -(R[c, W_TT_INV + 2] * u1 + R[c, W_TT_INV + 3] * u2)
+    grip = R[c, MU_S] * jn
+    if not s1 * s1 + s2 * s2 <= grip * grip:
+        scale = R[c, MU_K] * jn / math.sqrt(u1 * u1 + u2 * u2 + 1e-300)
+        s1, s2 = -u1 * scale, -u2 * scale
+    apply_impulse(R, c, 1, s1, a, b, vel, omega)
+    apply_impulse(R, c, 2, s2, a, b, vel, omega)
+    return s1, s2
+
+
+@njit(cache=True)
+def bounce_contact(R, I, c, threshold, ramp, h, w, vel, omega, vel_start, omega_start, target,
+                   tau, J):
+    """The pairwise bounce of contact c if it approaches and meets; True if it
+    bounced. Its first bounce of the substep happens at the impact: the
+    approach speed is the one at τ (`impact`), and the forces' change of
+    u_n after τ is added to the separation speed C_R × approach (the body
+    keeps falling for the rest of the substep, not bouncing off a speed
+    gravity gave it after the impact)."""
+    a, b = I[c, BODY_A], I[c, BODY_B]
+    u_now = row_velocity(R, c, 0, a, b, vel, omega)
+    after, when = 0.0, 1.0           # the forces' change of u_n after the impact, τ
+    shift = 0.0                      # physical u_n minus the integrator's (see below)
+    if target[c] == 0.0 and J[c, 0] == 0.0:
+        u0 = R[c, U0]                # u_n the integrator gave, before any impulse
+        u_s = row_velocity(R, c, 0, a, b, vel_start, omega_start)
+        # the integrators' velocities are staggered by (w − ½) h against the
+        # positions (semi-implicit Euler's is leapfrog's half-step velocity):
+        # the physical one at a step boundary is u + (w − ½) a h, w = END_WEIGHT
+        shift = (w - 0.5) * (u0 - u_s)
+        u_at, when = impact(u_s + shift, u0 + shift, R[c, DEPTH], h)
+        after = u0 + shift - u_at
+    u_imp = u_now + shift - after    # physical, at the impact, with the impulses so far
+    approach = -u_imp
+    if not (approach > threshold and approach * h > -R[c, DEPTH]):
+        return False
+    e = effective_restitution(R[c, E], approach, threshold, ramp)
+    if not e > 0.0:                  # an inelastic impact is the solve's (all its points at once)
+        return False
+    jn = (e * approach + after - shift - u_now) * R[c, MASS_N]
+    if not jn > 0.0:
+        return False
+    apply_impulse(R, c, 0, jn, a, b, vel, omega)
+    s1, s2 = bounce_friction(R, c, a, b, jn, vel, omega)
+    J[c, 0] += jn
+    J[c, 1] += s1
+    J[c, 2] += s2
+    if target[c] == 0.0:             # the first bounce of this contact sets its timing
+        target[c] = e * approach
+        tau[c] = when
+    return True
+
+
+@njit(cache=True)
+def collision_pass(R, I, vel, omega, vel_start, omega_start, threshold, ramp, h, w, sweeps,
+                   target, tau, J):
+    """Sweeps of pairwise bounces until none bounces (at most `sweeps`).
+    target[c] = C_R × approach of contact c's first bounce (0: it did not
+    bounce elastically), tau[c] its impact fraction (1 when none), J (k, 3)
+    the impulses applied; vel_start, omega_start: the velocities at the
+    start of the substep. Returns the number of bounces."""
     for c in range(len(R)):
-        approach = -R[c, U0]
         target[c] = 0.0
         tau[c] = 1.0
-        if not approach > threshold:
-            continue
-        e = effective_restitution(R[c, E], approach, threshold, ramp)
-        if e > 0.0 and R[c, LAM] > 0.0:
-            target[c] = e * approach
-            s0 = approach * h - R[c, DEPTH]
-            tau[c] = min(max(s0 / max(approach * h, 1e-300), 0.0), 1.0)
-            count += 1
+        J[c, 0] = J[c, 1] = J[c, 2] = 0.0
+    count = 0
+    for sweep in range(sweeps):
+        bounced = 0
+        for c in range(len(R)):
+            bounced += bounce_contact(R, I, c, threshold, ramp, h, w, vel, omega, vel_start,
+                                      omega_start, target, tau, J)
+        count += bounced
+        if bounced == 0:
+            break
     return count
+
+
+@njit(cache=True)
+def add_bounces(R, J, friction):
+    """The pass's impulses into the rows' λ and the friction vectors (after
+    the warm cache took the solve's own)."""
+    for c in range(len(R)):
+        for r in range(3):
+            R[c, LAM + r] += J[c, r]
+        for i in range(3):
+            friction[c, i] += J[c, 1] * R[c, DIR + 3 + i] + J[c, 2] * R[c, DIR + 6 + i]

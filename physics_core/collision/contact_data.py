@@ -24,9 +24,14 @@ ContactModel = namedtuple("ContactModel", "kind dims is_static reach material re
 # float parameters (fp)
 (MARGIN, STATIC_SPEED, WARM_FRACTION, VELOCITY_TOLERANCE, RESTITUTION_THRESHOLD,
  RESTITUTION_RAMP, SLOP, CORRECTION_RATE, MAX_CORRECTION_SPEED, CCD_THRESHOLD, CCD_TOLERANCE,
- SLEEP_LINEAR, SLEEP_ANGULAR, SLEEP_TIME, N_FP) = range(15)
+ SLEEP_LINEAR, SLEEP_ANGULAR, SLEEP_TIME, END_WEIGHT, N_FP) = range(16)
+# END_WEIGHT: the share of the end-of-substep velocity in the integrator's
+# displacement over a substep (INTEGRATOR_END_WEIGHT), for the time of impact
+INTEGRATOR_END_WEIGHT = {"explicit_euler": 0.0, "semi_implicit_euler": 1.0,
+                         "velocity_verlet": 0.5, "rk4": 0.5}
 # integer parameters (ip)
-(ITERATIONS, POSITION_ITERATIONS, CCD_ITERATIONS, CCD_ON, SLEEP_ON, RULE, N_IP) = range(7)
+(ITERATIONS, POSITION_ITERATIONS, CCD_ITERATIONS, CCD_ON, SLEEP_ON, RULE, RESTITUTION_ITERATIONS,
+ N_IP) = range(8)
 
 # the warm-start cache: per contact seen last substep, its key and (normal
 # impulse, friction impulse x y z, slip speed), ascending keys (warm_cache.py)
@@ -44,9 +49,11 @@ def contact_model(model) -> ContactModel:
                         np.ascontiguousarray(model.mu_kinetic, dtype=np.float64))
 
 
-def contact_params(p):
-    """(fp, ip) arrays of a contact_params.ContactParams."""
+def contact_params(p, integrator="semi_implicit_euler"):
+    """(fp, ip) arrays of a contact_params.ContactParams, for a scene integrated
+    by `integrator`."""
     fp = np.empty(N_FP)
+    fp[END_WEIGHT] = INTEGRATOR_END_WEIGHT[integrator]
     fp[[MARGIN, STATIC_SPEED, WARM_FRACTION, VELOCITY_TOLERANCE, RESTITUTION_THRESHOLD,
         RESTITUTION_RAMP, SLOP, CORRECTION_RATE, MAX_CORRECTION_SPEED, CCD_THRESHOLD,
         CCD_TOLERANCE, SLEEP_LINEAR, SLEEP_ANGULAR, SLEEP_TIME]] = (
@@ -55,9 +62,10 @@ def contact_params(p):
         p.max_correction_speed, p.ccd_threshold, p.ccd_tolerance, p.sleep_linear_speed,
         p.sleep_angular_speed, p.sleep_time)
     ip = np.empty(N_IP, np.int64)
-    ip[[ITERATIONS, POSITION_ITERATIONS, CCD_ITERATIONS, CCD_ON, SLEEP_ON, RULE]] = (
+    ip[[ITERATIONS, POSITION_ITERATIONS, CCD_ITERATIONS, CCD_ON, SLEEP_ON, RULE,
+        RESTITUTION_ITERATIONS]] = (
         p.iterations, p.position_iterations, p.ccd_iterations, int(p.ccd), int(p.sleep),
-        RESTITUTION_RULES[p.restitution_combine])
+        RESTITUTION_RULES[p.restitution_combine], p.restitution_iterations)
     return fp, ip
 
 

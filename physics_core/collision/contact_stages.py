@@ -11,18 +11,17 @@ import numpy as np
 from numba import njit
 
 from ..borrowed import borrow
-from .bounce import bounce_targets
+from .bounce import add_bounces, collision_pass
 from .contact_build import build_rows
 from .contact_data import (CCD_ITERATIONS, CCD_THRESHOLD, CCD_TOLERANCE, CORRECTION_RATE,
-                           ITERATIONS, MARGIN, MAX_CORRECTION_SPEED, POSITION_ITERATIONS,
-                           RESTITUTION_RAMP, RESTITUTION_THRESHOLD, RULE, SLEEP_ANGULAR,
-                           SLEEP_LINEAR, SLEEP_ON, SLEEP_TIME, SLOP, STATIC_SPEED,
-                           VELOCITY_TOLERANCE, WARM_FRACTION)
+                           END_WEIGHT, ITERATIONS, MARGIN, MAX_CORRECTION_SPEED,
+                           POSITION_ITERATIONS, RESTITUTION_ITERATIONS, RESTITUTION_RAMP,
+                           RESTITUTION_THRESHOLD, RULE, SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_ON,
+                           SLEEP_TIME, SLOP, STATIC_SPEED, VELOCITY_TOLERANCE, WARM_FRACTION)
 from .contact_layout import BODY_A, BODY_B, DEPTH, ICOL, LAM, NCOL
 from .detection import detect_arrays
 from .push_out import correct
-from .sequential_impulses import (friction_and_slip, least_mass, solve_normal_targets,
-                                  solve_velocities, warm_start)
+from .sequential_impulses import friction_and_slip, least_mass, solve_velocities, warm_start
 from .sleep_islands import _sync, _update, _wake_touched
 from .time_of_impact import rewind_fast_bodies
 from .warm_cache import warm_clear, warm_load, warm_store
@@ -89,7 +88,8 @@ def detect_stage(cm, fp, ip, pos, quat, awake, sleep, cap):
 
 @njit(cache=True)
 def rows_stage(cm, fp, ip, contacts, pos, quat, vel, omega, inv_mass, inv_inertia, warm, toi, h):
-    """The contact rows (R, I) of the detected contacts, warm-started from the cache."""
+    """The contact rows (R, I) of the detected contacts, their impulses loaded
+    from the warm cache (applied by restitution_stage)."""
     a, b, point, normal, depth, key = contacts
     made = (np.empty((len(a), NCOL)), np.empty((len(a), ICOL), np.int64))
     R, I = borrow(made)                            # physics_core/borrowed.py
@@ -100,15 +100,29 @@ def rows_stage(cm, fp, ip, contacts, pos, quat, vel, omega, inv_mass, inv_inerti
 
 
 @njit(cache=True)
-def solve_stage(fp, ip, R, I, key, vel, omega, warm):
-    """Warm start, sequential-impulse sweeps; the friction impulses (world
-    vectors) kept for the warm cache and the events. Returns them and the
-    sweeps done."""
+def restitution_stage(fp, ip, R, I, vel, omega, v0, w0, h):
+    """Warm start (the rows' loaded impulses applied), then the collision pass
+    (bounce.py), v0, w0 the start-of-substep velocities: (target, τ, J) of
+    every contact. The correct stage moves
+    positions by the velocity change from here on, warm start included."""
+    k = len(R)
+    if k and fp[WARM_FRACTION] > 0.0:
+        warm_start(R, I, vel, omega)
+    target, tau, J = np.empty(k), np.empty(k), np.empty((k, 3))
+    collision_pass(R, I, vel, omega, v0, w0, fp[RESTITUTION_THRESHOLD], fp[RESTITUTION_RAMP], h,
+                   fp[END_WEIGHT], ip[RESTITUTION_ITERATIONS], target, tau, J)
+    return target, tau, J
+
+
+@njit(cache=True)
+def solve_stage(fp, ip, R, I, key, vel, omega, warm, J):
+    """Sequential-impulse sweeps (the rows come warm-started), the solve's
+    impulses kept in the warm cache, then the collision pass's J added to
+    λ. Returns the friction impulses (world vectors, for the events) and
+    the sweeps done."""
     if len(R) == 0:
         warm_clear(warm[0], warm[1])
         return np.zeros((0, 3)), 0
-    if fp[WARM_FRACTION] > 0.0:
-        warm_start(R, I, vel, omega)
     # an impulse change dλ moves a row's relative velocity by about dλ / m_eff
     limit = fp[VELOCITY_TOLERANCE] * least_mass(R) if fp[VELOCITY_TOLERANCE] > 0.0 else -1.0
     sweeps = solve_velocities(R, I, vel, omega, ip[ITERATIONS], limit)
@@ -116,16 +130,8 @@ def solve_stage(fp, ip, R, I, key, vel, omega, warm):
     slip = np.empty(len(R))
     friction_and_slip(R, I, vel, omega, friction, slip)
     warm_store(warm[0], warm[1], key, R, friction, slip)
+    add_bounces(R, J, friction)
     return friction, sweeps
-
-
-@njit(cache=True)
-def restitution_stage(fp, R, I, vel, omega, h):
-    """(target, τ) of the bounce pass (bounce.py), after it ran."""
-    target, tau = np.empty(len(R)), np.empty(len(R))
-    if bounce_targets(R, fp[RESTITUTION_THRESHOLD], fp[RESTITUTION_RAMP], h, target, tau):
-        solve_normal_targets(R, I, target, vel, omega)
-    return target, tau
 
 
 @njit(cache=True)

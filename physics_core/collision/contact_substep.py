@@ -1,9 +1,9 @@
 """All the contact stages of one substep in one compiled call (COURSE.md 5),
 each timed and followed by the finite check.
 
-Stage order (Box2D v3's): ccd, collide, solve, restitution, correct,
-events, and sleep on the step's last substep (see __init__). `run` returns
--1, or the index of the stage after which some body's state was not
+Stage order: ccd, collide (rows, warm start), restitution (the collision
+pass, bounce.py), solve, correct, events, and sleep on the step's last
+substep (see __init__). `run` returns -1, or the index of the stage after which some body's state was not
 finite (the caller names it and the bodies).
 """
 import numpy as np
@@ -21,8 +21,8 @@ from .contact_stages import (ccd_stage, correct_stage, detect_stage, moving_bodi
 from .event_log import events_add, events_finish, events_reset
 from .time_of_impact import rewind_bodies
 
-CCD, COLLIDE, SOLVE, RESTITUTION, CORRECT, EVENTS, SLEEP, N_STAGES = range(8)
-STAGE_NAMES = ("ccd", "collide", "solve", "restitution", "correct", "events", "sleep")
+CCD, COLLIDE, RESTITUTION, SOLVE, CORRECT, EVENTS, SLEEP, N_STAGES = range(8)
+STAGE_NAMES = ("ccd", "collide", "restitution", "solve", "correct", "events", "sleep")
 
 
 @njit(cache=True)
@@ -71,11 +71,13 @@ def _events(events, contacts, R, friction, moving_mask, last):
 
 
 @njit(cache=True)
-def run(cm, fp, ip, s, masses, p0, q0, sleep, warm, events, h, dt, first, last, cap, prof):
+def run(cm, fp, ip, s, masses, start, sleep, warm, events, h, dt, first, last, cap, prof):
     """The contact stages of one substep; -1 or the failing stage. s = (pos,
-    quat, vel, omega, awake); masses = the solver's (inv_mass, inv_inertia),
+    quat, vel, omega, awake); start = the same four at the start of the
+    substep; masses = the solver's (inv_mass, inv_inertia),
     updated here when bodies wake or sleep; cap[0]: row-count guess, updated."""
     pos, quat, vel, omega, awake = s
+    p0, q0, v_start, w_start = start
     # the arrays made here are passed down borrowed (borrowed.py) and kept
     # alive by the keep_alive at the end
     toi_owned = np.full(len(pos), -1.0)
@@ -99,17 +101,17 @@ def run(cm, fp, ip, s, masses, p0, q0, sleep, warm, events, h, dt, first, last, 
     vel0, omega0 = borrow(before)
     prof[COLLIDE] += cycles() - t
     t = cycles()
-    solved = solve_stage(fp, ip, R, I, contacts[5], vel, omega, warm)
+    bounced = restitution_stage(fp, ip, R, I, vel, omega, v_start, w_start, h)
+    target, tau, J = borrow(bounced)
+    prof[RESTITUTION] += cycles() - t
+    if not _finite(pos, quat, vel, omega):
+        return RESTITUTION
+    t = cycles()
+    solved = solve_stage(fp, ip, R, I, contacts[5], vel, omega, warm, J)
     friction = borrow(solved[0])
     prof[SOLVE] += cycles() - t
     if not _finite(pos, quat, vel, omega):
         return SOLVE
-    t = cycles()
-    bounced = restitution_stage(fp, R, I, vel, omega, h)
-    target, tau = borrow(bounced)
-    prof[RESTITUTION] += cycles() - t
-    if not _finite(pos, quat, vel, omega):
-        return RESTITUTION
     t = cycles()
     if moves:
         _correct(cm, fp, ip, R, I, s, vel0, omega0, target, tau, toi, h)

@@ -23,7 +23,7 @@ class ContactSystem:
         self.model = model
         self.params = params
         self.cm = contact_model(model)
-        self.fp, self.ip = contact_params(params)
+        self.fp, self.ip = contact_params(params, model.integrator)
         names = list(STAGE_NAMES)
         if not params.sleep:
             names.remove("sleep")

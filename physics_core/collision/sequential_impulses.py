@@ -106,22 +106,6 @@ def solve_velocities(R, I, vel, omega, iterations, limit):
 
 
 @njit(cache=True)
-def solve_normal_targets(R, I, target, vel, omega):
-    """One sweep of the normal rows with target[c] > 0 towards u_n = target:
-    the restitution pass. λ_n keeps accumulating on the solve's, still ≥ 0,
-    so a bounce only ever pushes (Box2D's restitution stage)."""
-    for c in range(len(R)):
-        if not target[c] > 0.0:
-            continue
-        a, b = I[c, BODY_A], I[c, BODY_B]
-        un = row_velocity(R, c, 0, a, b, vel, omega)
-        old = R[c, LAM]
-        ln = max(old - R[c, MASS_N] * (un - target[c]), 0.0)
-        R[c, LAM] = ln
-        apply_impulse(R, c, 0, ln - old, a, b, vel, omega)
-
-
-@njit(cache=True)
 def friction_and_slip(R, I, vel, omega, friction, slip):
     """Per contact: the tangential impulse as a world vector λ_t1 t1 + λ_t2 t2
     (it survives a change of tangent basis) and the slip speed |u_t| now."""
