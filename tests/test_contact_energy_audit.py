@@ -66,3 +66,27 @@ def test_fast_spinning_box_against_a_thin_wall_never_gains_energy():
         w.step(24)
         assert w.kinetic_energy() <= e0 * (1 + 1e-9), f"trial {trial}"
         assert w.state.pos[1, 0] < 0.5, f"trial {trial}: crossed the wall"
+
+
+def test_overlapping_bodies_do_not_fall_asleep_before_they_are_pushed_apart():
+    """Sleep only at rest: two boxes spawned 3 cm into each other, without
+    gravity, have zero velocity while position correction (slow here)
+    separates them; they used to fall asleep after sleep_time with the
+    overlap frozen in. A body in a contact deeper than twice the slop stays
+    awake, so whenever they sleep they overlap by less than that."""
+    slop = 0.005
+    w = load({"dt": DT, "gravity": [0, 0, 0],
+              "effects": {"contacts": {"sleep": True, "sleep_time": 0.2, "correction_rate": 0.01,
+                                       "slop": slop}},
+              "bodies": [{"name": "a", "shape": {"type": "box", "half_extents": [0.1, 0.1, 0.1]},
+                          "mass": 1.0, "position": [0, 0, 0]},
+                         {"name": "b", "shape": {"type": "box", "half_extents": [0.1, 0.1, 0.1]},
+                          "mass": 1.0, "position": [0.17, 0, 0]}]})
+    slept = False
+    for _ in range(480):
+        w.step()
+        overlap = 0.2 - (w.state.pos[1, 0] - w.state.pos[0, 0])
+        if not w.state.awake.any():
+            slept = True
+            assert overlap <= 2 * slop + 1e-9
+    assert slept and overlap <= 2 * slop + 1e-9

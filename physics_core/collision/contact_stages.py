@@ -153,9 +153,24 @@ def touching_edges(R, I):
 
 
 @njit(cache=True)
+def unsettled_bodies(R, I, n, slop):
+    """Bodies in a contact deeper than twice the slop: position correction is
+    still pushing them apart, so they are not at rest whatever their velocity
+    (a resting contact sits at the slop, plus the sag of one substep of
+    gravity, g h², when it is detected)."""
+    out = np.zeros(n, np.bool_)
+    for c in range(len(R)):
+        if R[c, DEPTH] > 2.0 * slop:
+            out[I[c, BODY_A]] = True
+            out[I[c, BODY_B]] = True
+    return out
+
+
+@njit(cache=True)
 def sleep_stage(cm, fp, R, I, awake, vel, omega, sleep, dt):
     """Rest timers, and islands at rest put to sleep; True when some body slept."""
     timer, island, prev_awake, next_island = sleep
     ea, eb = touching_edges(R, I)
-    return _update(awake, cm.is_static, vel, omega, ea, eb, dt, fp[SLEEP_LINEAR],
+    unsettled = unsettled_bodies(R, I, len(awake), fp[SLOP])
+    return _update(awake, cm.is_static, vel, omega, unsettled, ea, eb, dt, fp[SLEEP_LINEAR],
                    fp[SLEEP_ANGULAR], fp[SLEEP_TIME], timer, island, prev_awake, next_island)

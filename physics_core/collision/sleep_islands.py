@@ -131,10 +131,12 @@ def _square(v, i):
 
 
 @njit(cache=True)
-def _advance(awake, is_static, vel, omega, dt, linear_speed, angular_speed, sleep_time,
-             timer, active):
+def _advance(awake, is_static, vel, omega, unsettled, dt, linear_speed, angular_speed,
+             sleep_time, timer, active):
     """active[i]: awake and dynamic. Advance the timers of the resting active
-    bodies by dt, reset the others'. Returns whether some body rested sleep_time."""
+    bodies by dt, reset the others' (moving, or `unsettled`: overlapping
+    deeper than the slop, so position correction still moves them though
+    their velocity reads rest). Returns whether some body rested sleep_time."""
     v_max = linear_speed * linear_speed
     w_max = angular_speed * angular_speed
     ready = False
@@ -142,7 +144,7 @@ def _advance(awake, is_static, vel, omega, dt, linear_speed, angular_speed, slee
         active[i] = awake[i] and not is_static[i]
         if not active[i]:
             continue
-        if _square(vel, i) < v_max and _square(omega, i) < w_max:
+        if _square(vel, i) < v_max and _square(omega, i) < w_max and not unsettled[i]:
             timer[i] += dt
         else:
             timer[i] = 0.0
@@ -213,8 +215,8 @@ def _fall_asleep(awake, vel, omega, active, label, slowest, sleep_time, island,
 
 
 @njit(cache=True)
-def _update(awake, is_static, vel, omega, edges_a, edges_b, dt, linear_speed, angular_speed,
-            sleep_time, timer, island, prev_awake, next_island):
+def _update(awake, is_static, vel, omega, unsettled, edges_a, edges_b, dt, linear_speed,
+            angular_speed, sleep_time, timer, island, prev_awake, next_island):
     """Advance the timers and put the rested islands to sleep (see SleepTimers.update)."""
     _check(awake, is_static, timer, island, prev_awake)
     n = len(awake)
@@ -224,8 +226,8 @@ def _update(awake, is_static, vel, omega, edges_a, edges_b, dt, linear_speed, an
     _check_bodies(edges_b, n)
     _sync(awake, timer, island, prev_awake)
     active = np.empty(len(awake), dtype=np.bool_)
-    if not _advance(awake, is_static, vel, omega, dt, linear_speed, angular_speed, sleep_time,
-                    timer, active):
+    if not _advance(awake, is_static, vel, omega, unsettled, dt, linear_speed, angular_speed,
+                    sleep_time, timer, active):
         return False
     label = _islands(active, edges_a, edges_b)
     slowest = _slowest(active, label, timer)
@@ -261,6 +263,7 @@ class SleepTimers:
         islands over the touching edges (edges_a, edges_b) that rested
         sleep_time to sleep: their vel and omega zeroed and awake cleared in
         place. Returns True when some body went to sleep."""
-        return _update(awake, is_static, vel, omega, edges_a, edges_b, float(dt),
+        return _update(awake, is_static, vel, omega, np.zeros(len(awake), np.bool_), edges_a,
+                       edges_b, float(dt),
                        float(linear_speed), float(angular_speed), float(sleep_time),
                        self.timer, self.island, self.prev_awake, self.next_island)
