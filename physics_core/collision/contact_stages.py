@@ -20,6 +20,7 @@ from .contact_data import (CCD_ITERATIONS, CCD_THRESHOLD, CCD_TOLERANCE, CORRECT
                            SLEEP_TIME, SLOP, STATIC_SPEED, VELOCITY_TOLERANCE, WARM_FRACTION)
 from .contact_layout import BODY_A, BODY_B, DEPTH, ICOL, LAM, NCOL
 from .detection import detect_arrays
+from .manifold_friction import anchor_friction_out, anchor_rows, anchor_warm_start
 from .push_out import correct
 from .sequential_impulses import friction_and_slip, least_mass, solve_velocities, warm_start
 from .sleep_islands import _sync, _update, _wake_touched
@@ -89,18 +90,20 @@ def detect_stage(cm, fp, ip, pos, quat, awake, sleep, cap):
 @njit(cache=True)
 def rows_stage(cm, fp, ip, contacts, pos, quat, vel, omega, inv_mass, inv_inertia, warm, toi, h):
     """The contact rows (R, I) of the detected contacts, their impulses loaded
-    from the warm cache (applied by restitution_stage)."""
+    from the warm cache (applied by restitution_stage), and the manifolds'
+    friction anchors (M, MI) (manifold_friction.py)."""
     a, b, point, normal, depth, key = contacts
     made = (np.empty((len(a), NCOL)), np.empty((len(a), ICOL), np.int64))
     R, I = borrow(made)                            # physics_core/borrowed.py
     build_rows(R, I, a, b, point, normal, depth, pos, quat, vel, omega, inv_mass, inv_inertia,
                cm.material, cm.mu_static, cm.mu_kinetic, cm.restitution, ip[RULE], h, toi)
     warm_load(R, I, key, warm[0], warm[1], fp[WARM_FRACTION], fp[STATIC_SPEED])
-    return made
+    M, MI = anchor_rows(R, I, point, pos, quat, inv_inertia)
+    return made[0], made[1], M, MI
 
 
 @njit(cache=True)
-def restitution_stage(fp, ip, R, I, vel, omega, v0, w0, h):
+def restitution_stage(fp, ip, R, I, M, MI, vel, omega, v0, w0, h):
     """Warm start (the rows' loaded impulses applied), then the collision pass
     (bounce.py), v0, w0 the start-of-substep velocities: (target, τ, J) of
     every contact. The correct stage moves
@@ -108,6 +111,7 @@ def restitution_stage(fp, ip, R, I, vel, omega, v0, w0, h):
     k = len(R)
     if k and fp[WARM_FRACTION] > 0.0:
         warm_start(R, I, vel, omega)
+        anchor_warm_start(M, MI, I, vel, omega)
     target, tau, J = np.empty(k), np.empty(k), np.empty((k, 3))
     collision_pass(R, I, vel, omega, v0, w0, fp[RESTITUTION_THRESHOLD], fp[RESTITUTION_RAMP], h,
                    fp[END_WEIGHT], ip[RESTITUTION_ITERATIONS], target, tau, J)
@@ -115,7 +119,7 @@ def restitution_stage(fp, ip, R, I, vel, omega, v0, w0, h):
 
 
 @njit(cache=True)
-def solve_stage(fp, ip, R, I, key, vel, omega, warm, J):
+def solve_stage(fp, ip, R, I, M, MI, key, vel, omega, warm, J):
     """Sequential-impulse sweeps (the rows come warm-started), the solve's
     impulses kept in the warm cache, then the collision pass's J added to
     λ. Returns the friction impulses (world vectors, for the events) and
@@ -125,10 +129,11 @@ def solve_stage(fp, ip, R, I, key, vel, omega, warm, J):
         return np.zeros((0, 3)), 0
     # an impulse change dλ moves a row's relative velocity by about dλ / m_eff
     limit = fp[VELOCITY_TOLERANCE] * least_mass(R) if fp[VELOCITY_TOLERANCE] > 0.0 else -1.0
-    sweeps = solve_velocities(R, I, vel, omega, ip[ITERATIONS], limit)
+    sweeps = solve_velocities(R, I, M, MI, vel, omega, ip[ITERATIONS], limit)
     friction = np.empty((len(R), 3))
     slip = np.empty(len(R))
     friction_and_slip(R, I, vel, omega, friction, slip)
+    anchor_friction_out(R, M, MI, friction)
     warm_store(warm[0], warm[1], key, R, friction, slip)
     add_bounces(R, J, friction)
     return friction, sweeps

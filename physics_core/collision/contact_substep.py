@@ -32,16 +32,16 @@ def _finite(pos, quat, vel, omega):
 
 @njit(cache=True)
 def _collide(cm, fp, ip, s, masses, sleep, warm, toi, h, cap):
-    """collide: detection, waking, rows; (contacts, R, I, rows computed)."""
+    """collide: detection, waking, rows; (contacts, R, I, M, MI, rows computed)."""
     pos, quat, vel, omega, awake = s
     a, b, point, normal, depth, key, k, woke = detect_stage(cm, fp, ip, pos, quat, awake, sleep,
                                                             cap)
     if woke:
         solver_masses(cm, awake, masses[0], masses[1])
     contacts = (a, b, point, normal, depth, key)
-    R, I = rows_stage(cm, fp, ip, borrow(contacts), pos, quat, vel, omega, masses[0], masses[1],
-                      warm, toi, h)
-    return contacts, R, I, k
+    R, I, M, MI = rows_stage(cm, fp, ip, borrow(contacts), pos, quat, vel, omega, masses[0],
+                             masses[1], warm, toi, h)
+    return contacts, R, I, M, MI, k
 
 
 @njit(cache=True)
@@ -92,7 +92,7 @@ def run(cm, fp, ip, s, masses, start, sleep, warm, events, h, dt, first, last, c
             return CCD
     t = cycles()
     made = _collide(cm, fp, ip, s, masses, sleep, warm, toi, h, cap[0])
-    contacts, R, I, k = borrow(made)
+    contacts, R, I, M, MI, k = borrow(made)
     cap[0] = k + k // 8 + 4
     # with no contact and no body moved back, the solve changes no velocity
     # and the correct stage has nothing to move: it is skipped
@@ -101,13 +101,13 @@ def run(cm, fp, ip, s, masses, start, sleep, warm, events, h, dt, first, last, c
     vel0, omega0 = borrow(before)
     prof[COLLIDE] += cycles() - t
     t = cycles()
-    bounced = restitution_stage(fp, ip, R, I, vel, omega, v_start, w_start, h)
+    bounced = restitution_stage(fp, ip, R, I, M, MI, vel, omega, v_start, w_start, h)
     target, tau, J = borrow(bounced)
     prof[RESTITUTION] += cycles() - t
     if not _finite(pos, quat, vel, omega):
         return RESTITUTION
     t = cycles()
-    solved = solve_stage(fp, ip, R, I, contacts[5], vel, omega, warm, J)
+    solved = solve_stage(fp, ip, R, I, M, MI, contacts[5], vel, omega, warm, J)
     friction = borrow(solved[0])
     prof[SOLVE] += cycles() - t
     if not _finite(pos, quat, vel, omega):

@@ -9,7 +9,9 @@ previous ones left: the order is fixed, hence the result deterministic. The
 accumulated, clamped λ makes many simultaneous contacts converge and lets
 last substep's λ be applied first (warm starting).
 
-Friction is one 2-D impulse in the tangent plane, solved with the tangent
+A manifold of two or more points has one friction anchor at its centre
+(manifold_friction.py), solved after its points' normal rows. A single
+point's friction is one 2-D impulse in the tangent plane, solved with the tangent
 block W_tt (friction.py): the impulse that stops the slip, corrected for the
 velocity the normal change of the same update gives (W_tn), capped at
 μ λ_n. Over the cap, a sliding contact (kinetic, μ_k) takes μ_k λ_n against
@@ -21,6 +23,7 @@ import math
 from numba import njit
 
 from .contact_build import row_velocity
+from .manifold_friction import COUNT, FIRST, update_anchor
 from .contact_layout import (BIAS, BODY_A, BODY_B, DIR, G_TN, INV_MASS_A, INV_MASS_B, LAM, MASS_N,
                              MU, SLIDING, TURN_A, TURN_B, W_TN, W_TT_INV)
 
@@ -90,16 +93,45 @@ def update_contact(R, I, c, vel, omega):
 
 
 @njit(cache=True)
-def solve_velocities(R, I, vel, omega, iterations, limit):
-    """At most `iterations` sweeps over every contact; stops after a sweep
+def update_normal(R, I, c, vel, omega):
+    """The normal row of contact c alone (its friction is its manifold's anchor)."""
+    a, b = I[c, BODY_A], I[c, BODY_B]
+    un = row_velocity(R, c, 0, a, b, vel, omega)
+    old = R[c, LAM]
+    ln = max(old - R[c, MASS_N] * (un - R[c, BIAS]), 0.0)
+    R[c, LAM] = ln
+    apply_impulse(R, c, 0, ln - old, a, b, vel, omega)
+    return abs(ln - old)
+
+
+@njit(cache=True)
+def sweep_manifolds(R, I, M, MI, vel, omega):
+    """One Gauss–Seidel sweep, manifold by manifold in key order: a single
+    point as one contact; two or more, their normal rows, then their
+    friction anchor (manifold_friction.py). Returns the largest change."""
+    change = 0.0
+    for k in range(len(MI)):
+        first, count = MI[k, FIRST], MI[k, COUNT]
+        if count >= 2:
+            for c in range(first, first + count):
+                d = update_normal(R, I, c, vel, omega)
+                if not d < change:
+                    change = d
+            d = update_anchor(R, I, M, MI, k, vel, omega)
+        else:
+            d = update_contact(R, I, first, vel, omega)
+        if not d < change:
+            change = d
+    return change
+
+
+@njit(cache=True)
+def solve_velocities(R, I, M, MI, vel, omega, iterations, limit):
+    """At most `iterations` sweeps over every manifold; stops after a sweep
     that changed no impulse by more than `limit` (N·s; < 0: never). A NaN
     change never stops early. Returns the number of sweeps done."""
     for sweep in range(iterations):
-        change = 0.0
-        for c in range(len(R)):
-            d = update_contact(R, I, c, vel, omega)
-            if not d < change:
-                change = d
+        change = sweep_manifolds(R, I, M, MI, vel, omega)
         if limit > 0.0 and change < limit:
             return sweep + 1
     return iterations

@@ -1,0 +1,241 @@
+"""Friction of a whole manifold: one anchor at the centre of its points
+(COURSE.md 2 and 5, static and kinetic friction).
+
+The course's static friction holds a contact while the tangential force it
+needs is within μ_s times its normal force. Solved point by point, a box's
+four corners each take the impulse that stops its own slip; with the
+rotational coupling of each corner those impulses point partly sideways
+and cancel in pairs, so the box slid at 0.91–0.94 μ_s. Here a manifold of
+two or more points (rows of one body pair, contiguous in key order) has one
+friction anchor at the centroid c of its points, three constraint rows:
+
+    r = 0, 1  the tangents t1, t2 at c:  u_r = t_r·(v_b − v_a) + (r_b × t_r)·ω_b − (r_a × t_r)·ω_a
+    r = 2     the twist about n:         u_2 = n·(ω_b − ω_a)
+
+(r_a = c − x_a, r_b = c − x_b), solved together with their 3×3 effective
+mass W (W_rs = u_r's change per unit impulse along s). The tangential
+impulse is capped by μ Σλ_n over the whole manifold (μ_s while it holds,
+μ_k against the slip once it slides) and the twist by μ Σλ_n r̄, r̄ the
+mean distance of the points from c. The points keep their normal rows.
+
+`M` (m, MCOL) float and `MI` (m, MICOL) int hold one row per manifold
+(single-point ones too, so the solver loops over manifolds); a manifold is
+anchored when MI[m, COUNT] ≥ 2.
+"""
+import math
+
+import numpy as np
+from numba import njit
+
+from .contact_build import world_inverse_inertia
+from .contact_layout import BODY_A, BODY_B, DIR, INV_MASS_A, INV_MASS_B, LAM, MU_K, MU_S, SLIDING
+
+# float columns: per row r (3): linear direction L, angular parts for a and b,
+# I_w⁻¹ times them; then the bodies' inverse masses, W⁻¹ (3×3), μ_s, μ_k, r̄, λ (3)
+L, AA, AB, TA, TB = 0, 9, 18, 27, 36
+IMA, IMB, W_INV, M_MU_S, M_MU_K, RADIUS, M_LAM, MCOL = 45, 46, 47, 56, 57, 58, 59, 62
+# int columns: first row, number of rows, sliding (kinetic friction this substep)
+FIRST, COUNT, M_SLIDING, MICOL = 0, 1, 2, 3
+_TINY = 1e-300
+
+
+@njit(cache=True)
+def manifold_ranges(I):
+    """MI with the first row and row count of every run of rows of one pair."""
+    m = 0
+    for c in range(len(I)):
+        m += c == 0 or I[c, BODY_A] != I[c - 1, BODY_A] or I[c, BODY_B] != I[c - 1, BODY_B]
+    MI = np.zeros((m, MICOL), np.int64)
+    k = -1
+    for c in range(len(I)):
+        if c == 0 or I[c, BODY_A] != I[c - 1, BODY_A] or I[c, BODY_B] != I[c - 1, BODY_B]:
+            k += 1
+            MI[k, FIRST] = c
+        MI[k, COUNT] += 1
+        MI[k, M_SLIDING] |= I[c, SLIDING]
+    return MI
+
+
+@njit(cache=True)
+def _centre(point, first, count):
+    """Centroid of the manifold's points and their mean distance from it."""
+    cx = cy = cz = 0.0
+    for c in range(first, first + count):
+        cx += point[c, 0]
+        cy += point[c, 1]
+        cz += point[c, 2]
+    cx, cy, cz = cx / count, cy / count, cz / count
+    rbar = 0.0
+    for c in range(first, first + count):
+        rbar += math.sqrt((point[c, 0] - cx) ** 2 + (point[c, 1] - cy) ** 2
+                          + (point[c, 2] - cz) ** 2)
+    return cx, cy, cz, rbar / count
+
+
+@njit(cache=True)
+def _body_parts(M, k, ang, turn, sign, rx, ry, rz, iw):
+    """Angular parts of one body for the three rows: r × t1, r × t2, n."""
+    for r in range(3):
+        dx, dy, dz = M[k, L + 3 * r], M[k, L + 3 * r + 1], M[k, L + 3 * r + 2]
+        if r == 2:
+            cx, cy, cz = sign[0], sign[1], sign[2]
+        else:
+            cx, cy, cz = ry * dz - rz * dy, rz * dx - rx * dz, rx * dy - ry * dx
+        o = ang + 3 * r
+        M[k, o], M[k, o + 1], M[k, o + 2] = cx, cy, cz
+        o = turn + 3 * r
+        for i in range(3):
+            M[k, o + i] = iw[i, 0] * cx + iw[i, 1] * cy + iw[i, 2] * cz
+
+
+@njit(cache=True)
+def _coupling(M, k, r, s):
+    ll = 0.0
+    wa = 0.0
+    wb = 0.0
+    for i in range(3):
+        ll += M[k, L + 3 * r + i] * M[k, L + 3 * s + i]
+        wa += M[k, AA + 3 * r + i] * M[k, TA + 3 * s + i]
+        wb += M[k, AB + 3 * r + i] * M[k, TB + 3 * s + i]
+    return (M[k, IMA] + M[k, IMB]) * ll + wa + wb
+
+
+@njit(cache=True)
+def _invert(M, k):
+    """W⁻¹ of manifold k (adjugate over determinant; W is symmetric positive)."""
+    w = np.empty((3, 3))
+    for r in range(3):
+        for s in range(3):
+            w[r, s] = _coupling(M, k, r, s)
+    det = (w[0, 0] * (w[1, 1] * w[2, 2] - w[1, 2] * w[2, 1])
+           - w[0, 1] * (w[1, 0] * w[2, 2] - w[1, 2] * w[2, 0])
+           + w[0, 2] * (w[1, 0] * w[2, 1] - w[1, 1] * w[2, 0]))
+    inv = 1.0 / (det if abs(det) > 1e-30 else 1e-30)
+    for r in range(3):
+        for s in range(3):
+            r1, r2, s1, s2 = (s + 1) % 3, (s + 2) % 3, (r + 1) % 3, (r + 2) % 3
+            M[k, W_INV + 3 * r + s] = (w[r1, s1] * w[r2, s2] - w[r1, s2] * w[r2, s1]) * inv
+
+
+@njit(cache=True)
+def anchor_rows(R, I, point, pos, quat, inv_inertia):
+    """(M, MI) of the contact rows: every manifold's range, and the anchor
+    rows of those with two or more points (the rows' own friction zeroed)."""
+    MI = manifold_ranges(I)
+    M = np.zeros((len(MI), MCOL))
+    iw_a, iw_b = np.empty((3, 3)), np.empty((3, 3))
+    n = np.empty(3)
+    for k in range(len(MI)):
+        first, count = MI[k, FIRST], MI[k, COUNT]
+        if count < 2:
+            continue
+        a, b = I[first, BODY_A], I[first, BODY_B]
+        cx, cy, cz, rbar = _centre(point, first, count)
+        for i in range(9):
+            M[k, L + i] = R[first, DIR + 3 + i] if i < 6 else 0.0
+        for i in range(3):
+            n[i] = R[first, DIR + i]
+        M[k, IMA], M[k, IMB] = R[first, INV_MASS_A], R[first, INV_MASS_B]
+        world_inverse_inertia(quat[a], inv_inertia[a], iw_a)
+        world_inverse_inertia(quat[b], inv_inertia[b], iw_b)
+        _body_parts(M, k, AA, TA, n, cx - pos[a, 0], cy - pos[a, 1], cz - pos[a, 2], iw_a)
+        _body_parts(M, k, AB, TB, n, cx - pos[b, 0], cy - pos[b, 1], cz - pos[b, 2], iw_b)
+        _invert(M, k)
+        M[k, M_MU_S], M[k, M_MU_K], M[k, RADIUS] = R[first, MU_S], R[first, MU_K], rbar
+        _take_row_friction(R, M, k, first, count)
+    return M, MI
+
+
+@njit(cache=True)
+def _take_row_friction(R, M, k, first, count):
+    """The rows' warm-started friction impulses (world vectors) summed into the
+    anchor's tangential λ; the rows keep none of their own."""
+    for c in range(first, first + count):
+        for r in range(2):
+            lam = 0.0
+            for i in range(3):
+                f = R[c, LAM + 1] * R[c, DIR + 3 + i] + R[c, LAM + 2] * R[c, DIR + 6 + i]
+                lam += f * M[k, L + 3 * r + i]
+            M[k, M_LAM + r] += lam
+        R[c, LAM + 1] = 0.0
+        R[c, LAM + 2] = 0.0
+
+
+@njit(cache=True)
+def anchor_velocity(M, k, r, a, b, vel, omega):
+    u = 0.0
+    for i in range(3):
+        u += (M[k, L + 3 * r + i] * (vel[b, i] - vel[a, i])
+              + M[k, AB + 3 * r + i] * omega[b, i] - M[k, AA + 3 * r + i] * omega[a, i])
+    return u
+
+
+@njit(cache=True)
+def anchor_impulse(M, k, r, lam, a, b, vel, omega):
+    ima, imb = M[k, IMA] * lam, M[k, IMB] * lam
+    for i in range(3):
+        d = M[k, L + 3 * r + i]
+        vel[a, i] -= ima * d
+        omega[a, i] -= lam * M[k, TA + 3 * r + i]
+        vel[b, i] += imb * d
+        omega[b, i] += lam * M[k, TB + 3 * r + i]
+
+
+@njit(cache=True)
+def anchor_warm_start(M, MI, I, vel, omega):
+    for k in range(len(MI)):
+        if MI[k, COUNT] >= 2:
+            a, b = I[MI[k, FIRST], BODY_A], I[MI[k, FIRST], BODY_B]
+            for r in range(2):
+                if M[k, M_LAM + r] != 0.0:
+                    anchor_impulse(M, k, r, M[k, M_LAM + r], a, b, vel, omega)
+
+
+@njit(cache=True)
+def update_anchor(R, I, M, MI, k, vel, omega):
+    """One update of manifold k's anchor; returns its largest impulse change."""
+    first, count = MI[k, FIRST], MI[k, COUNT]
+    a, b = I[first, BODY_A], I[first, BODY_B]
+    ln = 0.0
+    for c in range(first, first + count):
+        ln += R[c, LAM]
+    u0 = anchor_velocity(M, k, 0, a, b, vel, omega)
+    u1 = anchor_velocity(M, k, 1, a, b, vel, omega)
+    u2 = anchor_velocity(M, k, 2, a, b, vel, omega)
+    old0, old1, old2 = M[k, M_LAM], M[k, M_LAM + 1], M[k, M_LAM + 2]
+    o = W_INV
+    n0 = old0 - (M[k, o] * u0 + M[k, o + 1] * u1 + M[k, o + 2] * u2)
+    n1 = old1 - (M[k, o + 3] * u0 + M[k, o + 4] * u1 + M[k, o + 5] * u2)
+    n2 = old2 - (M[k, o + 6] * u0 + M[k, o + 7] * u1 + M[k, o + 8] * u2)
+    sliding = MI[k, M_SLIDING] != 0
+    mu = M[k, M_MU_K] if sliding else M[k, M_MU_S]
+    lim = mu * ln
+    mag2 = n0 * n0 + n1 * n1
+    if mag2 > lim * lim:
+        if sliding:              # μ_k λ_n against the slip (COURSE.md 2)
+            s = lim / math.sqrt(u0 * u0 + u1 * u1 + _TINY)
+            n0, n1 = -u0 * s, -u1 * s
+        else:                    # the static bound, in the direction that would hold
+            s = lim / math.sqrt(mag2 + _TINY)
+            n0, n1 = n0 * s, n1 * s
+    twist = mu * ln * M[k, RADIUS]
+    n2 = min(max(n2, -twist), twist)
+    M[k, M_LAM], M[k, M_LAM + 1], M[k, M_LAM + 2] = n0, n1, n2
+    anchor_impulse(M, k, 0, n0 - old0, a, b, vel, omega)
+    anchor_impulse(M, k, 1, n1 - old1, a, b, vel, omega)
+    anchor_impulse(M, k, 2, n2 - old2, a, b, vel, omega)
+    return max(abs(n0 - old0), max(abs(n1 - old1), abs(n2 - old2)))
+
+
+@njit(cache=True)
+def anchor_friction_out(R, M, MI, friction):
+    """The anchors' tangential impulses shared equally by their rows, as world
+    vectors (the warm cache and the events read the rows)."""
+    for k in range(len(MI)):
+        first, count = MI[k, FIRST], MI[k, COUNT]
+        if count < 2:
+            continue
+        for c in range(first, first + count):
+            for i in range(3):
+                friction[c, i] = (M[k, M_LAM] * M[k, L + i]
+                                  + M[k, M_LAM + 1] * M[k, L + 3 + i]) / count
