@@ -77,60 +77,69 @@ def run(cm, fp, ip, s, masses, start, sleep, warm, events, h, dt, first, last, c
     substep; masses = the solver's (inv_mass, inv_inertia),
     updated here when bodies wake or sleep; cap[0]: row-count guess, updated."""
     pos, quat, vel, omega, awake = s
-    p0, q0, v_start, w_start = start
     # the arrays made here are passed down borrowed (borrowed.py) and kept
-    # alive by the keep_alive at the end
+    # alive by the keep_alive calls at the end
     toi_owned = np.full(len(pos), -1.0)
     toi = borrow(toi_owned)
     if first:
         events_reset(events)
     if ip[CCD_ON]:
         t = cycles()
-        ccd_stage(cm, fp, ip, pos, quat, omega, awake, p0, q0, toi)
+        ccd_stage(cm, fp, ip, pos, quat, omega, awake, start[0], start[1], toi)
         prof[CCD] += cycles() - t
         if not _finite(pos, quat, vel, omega):
             return CCD
     t = cycles()
     made = _collide(cm, fp, ip, s, masses, sleep, warm, toi, h, cap[0])
-    contacts, R, I, M, MI, k = borrow(made)
-    cap[0] = k + k // 8 + 4
+    rows = borrow(made)
+    cap[0] = rows[5] + rows[5] // 8 + 4
     # with no contact and no body moved back, the solve changes no velocity
     # and the correct stage has nothing to move: it is skipped
-    moves = len(R) > 0 or (toi >= 0.0).any()
+    moves = len(rows[1]) > 0 or (toi >= 0.0).any()
     before = (vel.copy(), omega.copy()) if moves else (vel[:0], omega[:0])
-    vel0, omega0 = borrow(before)
     prof[COLLIDE] += cycles() - t
+    failed = _respond(cm, fp, ip, s, masses, start, sleep, warm, events, h, dt, last, prof, rows,
+                      toi, borrow(before), moves)
+    keep_alive(toi_owned)
+    keep_alive(made)
+    keep_alive(before)
+    return failed
+
+
+@njit(cache=True)
+def _respond(cm, fp, ip, s, masses, start, sleep, warm, events, h, dt, last, prof, rows, toi,
+             before, moves):
+    """restitution, solve, correct, events and sleep on the collide stage's
+    rows = (contacts, R, I, M, MI, k); -1 or the failing stage."""
+    pos, quat, vel, omega, awake = s
+    contacts, R, I, M, MI, _ = rows
     t = cycles()
-    bounced = restitution_stage(fp, ip, R, I, M, MI, vel, omega, v_start, w_start, h)
+    bounced = restitution_stage(fp, ip, R, I, M, MI, vel, omega, start[2], start[3], h)
     target, tau, J = borrow(bounced)
     prof[RESTITUTION] += cycles() - t
     if not _finite(pos, quat, vel, omega):
         return RESTITUTION
     t = cycles()
     solved = solve_stage(fp, ip, R, I, M, MI, contacts[5], vel, omega, warm, J)
-    friction = borrow(solved[0])
     prof[SOLVE] += cycles() - t
     if not _finite(pos, quat, vel, omega):
         return SOLVE
     t = cycles()
     if moves:
-        _correct(cm, fp, ip, R, I, s, vel0, omega0, target, tau, toi, h)
+        _correct(cm, fp, ip, R, I, s, before[0], before[1], target, tau, toi, h)
     prof[CORRECT] += cycles() - t
     if not _finite(pos, quat, vel, omega):
         return CORRECT
     t = cycles()
     moving = moving_bodies(cm.is_static, awake)
-    _events(events, contacts, R, friction, borrow(moving), last)
+    _events(events, contacts, R, borrow(solved[0]), borrow(moving), last)
     prof[EVENTS] += cycles() - t
     if last and ip[SLEEP_ON]:
         t = cycles()
         if sleep_stage(cm, fp, R, I, awake, vel, omega, sleep, dt):
             solver_masses(cm, awake, masses[0], masses[1])
         prof[SLEEP] += cycles() - t
-    keep_alive(toi_owned)
-    keep_alive(made)
-    keep_alive(before)
-    keep_alive(solved)
     keep_alive(bounced)
+    keep_alive(solved)
     keep_alive(moving)
     return -1
