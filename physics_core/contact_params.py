@@ -36,7 +36,8 @@ class ContactParams:
     ccd: bool = True                     # time-of-impact for fast bodies so thin walls are not crossed
     ccd_threshold: float = 0.5           # a body is fast when any of its points moves more than this
                                          # fraction of its smallest half extent (or radius) in one (sub)step
-    ccd_iterations: int = 30             # bisection halvings of [t, t + h] at most
+    ccd_iterations: int = 30             # bisection halvings of [t, t + h] at most (more while the
+                                         # pose found is still beyond the margin: it must touch)
     ccd_tolerance: float = 1e-4          # fraction of the (sub)step: bisection stops when the bracket
                                          # [t0, t1] is shorter (the body is left apart, at t0)
     # -- sleep (Box2D: bodies at rest leave the solver) --

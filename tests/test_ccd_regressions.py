@@ -104,3 +104,24 @@ def test_rewinding_a_fast_spinning_box_never_adds_energy(seed):
     # free_error (about 3e-5 at ω h = 0.42 rad); the contacts and rewinds add nothing
     assert highest <= e0 * (1.0 + 3.0 * free_error + 1e-12)
     assert world.body("crate").position[0] < 0.0      # never through the wall
+
+
+@pytest.mark.parametrize("halvings", [1, 2, 4])
+def test_ball_with_few_ccd_halvings_is_not_frozen_short_of_a_wall(halvings):
+    """With 1–2 halvings the bisection used to leave a 50 m/s ball 2 cm short
+    of a 4 cm wall, beyond the contact margin: no contact formed and the ball
+    was moved back to the same pose every step, never bouncing. The
+    bisection now goes on while the pose found is out of contact reach: the
+    elastic ball bounces back at 50 m/s in the step it arrives."""
+    wall = {"name": "wall", "shape": {"type": "box", "half_extents": [0.02, 1.0, 1.0]},
+            "static": True, "material": "steel", "restitution": 1.0}
+    ball = {"name": "ball", "shape": {"type": "sphere", "radius": 0.05}, "mass": 0.01,
+            "material": "steel", "restitution": 1.0, "position": [-(0.07 + 0.33), 0.0, 0.0],
+            "velocity": [50.0, 0.0, 0.0]}
+    world = load_scene(scene(wall, ball, dt=1.0 / 60.0, gravity=[0, 0, 0],
+                             effects={"contacts": {"ccd_iterations": halvings,
+                                                   "ccd_tolerance": 1e-12, "sleep": False}}))
+    world.step(2)
+    b = world.body("ball")
+    assert b.velocity[0] == pytest.approx(-50.0, rel=1e-9)
+    assert b.position[0] < -0.07

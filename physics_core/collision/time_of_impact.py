@@ -251,17 +251,31 @@ def pair_impact(i, j, kind, dims, reach, p0, q0, pos, quat, margin, threshold, i
     for s in range(1, count + 1):
         hi = s / count
         if depth_at(i, j, hi, kind, dims, p0, q0, pos, quat, poses, scratch) > limit:
-            for _ in range(iterations):
-                if hi - lo < tolerance:
-                    break
-                mid = 0.5 * (lo + hi)
-                if depth_at(i, j, mid, kind, dims, p0, q0, pos, quat, poses, scratch) > limit:
-                    hi = mid
-                else:
-                    lo = mid
-            return lo
+            return _bisect(i, j, lo, hi, limit, kind, dims, p0, q0, pos, quat, margin, iterations,
+                           tolerance, poses, scratch)
         lo = hi
     return -1.0
+
+
+@njit(cache=True)
+def _bisect(i, j, lo, hi, limit, kind, dims, p0, q0, pos, quat, margin, iterations, tolerance,
+            poses, scratch):
+    """The hit bracketed in [lo, hi] halved `iterations` times (or until shorter
+    than `tolerance`); then, while the pose at lo is still farther apart than
+    the contact margin, halved on: a body moved back there would form no
+    contact and be moved back to the same pose every step."""
+    k = 0
+    while hi - lo >= tolerance:
+        if k >= iterations and depth_at(i, j, lo, kind, dims, p0, q0, pos, quat, poses,
+                                        scratch) >= -margin:
+            break
+        mid = 0.5 * (lo + hi)
+        if depth_at(i, j, mid, kind, dims, p0, q0, pos, quat, poses, scratch) > limit:
+            hi = mid
+        else:
+            lo = mid
+        k += 1
+    return lo
 
 
 @njit(cache=True)
