@@ -7,6 +7,7 @@ import sys
 import time
 
 import rclpy
+from rclpy.duration import Duration
 from rclpy.executors import ExternalShutdownException
 from rosgraph_msgs.msg import Clock
 
@@ -130,7 +131,20 @@ def republish(node, recording, rate, wait=2.0):
             last = t
         publishers[m.topic].publish(m.data)
         count += 1
+    _drain([clock, *publishers.values()])
     return count
+
+
+def _drain(publishers, timeout=2.0):
+    """Wait (up to `timeout` s in all) until every reliable subscriber has
+    acknowledged what was published: a process that exits at once takes its
+    last, still unsent messages with it (the final /clock and poses)."""
+    deadline = time.monotonic() + timeout
+    for p in publishers:
+        left = deadline - time.monotonic()
+        if left <= 0:
+            return
+        p.wait_for_all_acked(Duration(nanoseconds=int(left * 1e9)))
 
 
 if __name__ == "__main__":
