@@ -40,15 +40,21 @@ _TINY = 1e-300
 
 
 @njit(cache=True)
+def _starts_run(I, c):
+    """Whether row c begins a manifold: the first row, or a new body pair."""
+    return c == 0 or I[c, BODY_A] != I[c - 1, BODY_A] or I[c, BODY_B] != I[c - 1, BODY_B]
+
+
+@njit(cache=True)
 def manifold_ranges(I):
     """MI with the first row and row count of every run of rows of one pair."""
     m = 0
     for c in range(len(I)):
-        m += c == 0 or I[c, BODY_A] != I[c - 1, BODY_A] or I[c, BODY_B] != I[c - 1, BODY_B]
+        m += _starts_run(I, c)
     MI = np.zeros((m, MICOL), np.int64)
     k = -1
     for c in range(len(I)):
-        if c == 0 or I[c, BODY_A] != I[c - 1, BODY_A] or I[c, BODY_B] != I[c - 1, BODY_B]:
+        if _starts_run(I, c):
             k += 1
             MI[k, FIRST] = c
         MI[k, COUNT] += 1
@@ -73,12 +79,12 @@ def _centre(point, first, count):
 
 
 @njit(cache=True)
-def _body_parts(M, k, ang, turn, sign, rx, ry, rz, iw):
+def _body_parts(M, k, ang, turn, normal, rx, ry, rz, iw):
     """Angular parts of one body for the three rows: r × t1, r × t2, n."""
     for r in range(3):
         dx, dy, dz = M[k, L + 3 * r], M[k, L + 3 * r + 1], M[k, L + 3 * r + 2]
         if r == 2:
-            cx, cy, cz = sign[0], sign[1], sign[2]
+            cx, cy, cz = normal[0], normal[1], normal[2]
         else:
             cx, cy, cz = ry * dz - rz * dy, rz * dx - rx * dz, rx * dy - ry * dx
         o = ang + 3 * r
@@ -101,9 +107,9 @@ def _coupling(M, k, r, s):
 
 
 @njit(cache=True)
-def _invert(M, k):
-    """W⁻¹ of manifold k (adjugate over determinant; W is symmetric positive)."""
-    w = np.empty((3, 3))
+def _invert(M, k, w):
+    """W⁻¹ of manifold k (adjugate over determinant; W is symmetric positive);
+    w: (3, 3) scratch."""
     for r in range(3):
         for s in range(3):
             w[r, s] = _coupling(M, k, r, s)
@@ -123,7 +129,7 @@ def anchor_rows(R, I, point, pos, quat, inv_inertia):
     rows of those with two or more points (the rows' own friction zeroed)."""
     MI = manifold_ranges(I)
     M = np.zeros((len(MI), MCOL))
-    iw_a, iw_b = np.empty((3, 3)), np.empty((3, 3))
+    iw_a, iw_b, w = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     n = np.empty(3)
     for k in range(len(MI)):
         first, count = MI[k, FIRST], MI[k, COUNT]
@@ -140,7 +146,7 @@ def anchor_rows(R, I, point, pos, quat, inv_inertia):
         world_inverse_inertia(quat[b], inv_inertia[b], iw_b)
         _body_parts(M, k, AA, TA, n, cx - pos[a, 0], cy - pos[a, 1], cz - pos[a, 2], iw_a)
         _body_parts(M, k, AB, TB, n, cx - pos[b, 0], cy - pos[b, 1], cz - pos[b, 2], iw_b)
-        _invert(M, k)
+        _invert(M, k, w)
         M[k, M_MU_S], M[k, M_MU_K], M[k, RADIUS] = R[first, MU_S], R[first, MU_K], rbar
         _take_row_friction(R, M, k, first, count)
     return M, MI
