@@ -91,11 +91,11 @@ def run_steps(n, substeps, dt, code, idata, body, loads, masses, work, contacts,
 
 def no_contacts():
     """(contacts, warm cache, event state) of a scene without the contacts effect."""
-    from .collision.contact_data import ContactModel, new_sleep_state, new_warm_cache
+    from .collision.contact_data import N_FP, N_IP, ContactModel, new_sleep_state, new_warm_cache
     from .collision.event_log import new_event_state
     z = np.zeros(0)
     cm = ContactModel(np.zeros(0, np.int64), np.zeros((0, 8)), np.zeros(0, np.bool_), z,
                       np.zeros(0, np.int64), z, z, np.zeros((0, 3)), np.zeros((1, 1)),
                       np.zeros((1, 1)))
-    return ((cm, np.zeros(16), np.zeros(8, np.int64), new_sleep_state(0), np.zeros(1, np.int64)),
+    return ((cm, np.zeros(N_FP), np.zeros(N_IP, np.int64), new_sleep_state(0), np.zeros(1, np.int64)),
             new_warm_cache(), new_event_state())

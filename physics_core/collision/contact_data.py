@@ -31,7 +31,12 @@ INTEGRATOR_END_WEIGHT = {"explicit_euler": 0.0, "semi_implicit_euler": 1.0,
                          "velocity_verlet": 0.5, "rk4": 0.5}
 # integer parameters (ip)
 (ITERATIONS, POSITION_ITERATIONS, CCD_ITERATIONS, CCD_ON, SLEEP_ON, RULE, RESTITUTION_ITERATIONS,
- N_IP) = range(8)
+ SHOCK_ON, N_IP) = range(9)
+
+# ip[SHOCK_ON]: updates of one manifold at most in the shock-propagation sweep
+# (shock_propagation.py); a box on four corners needed 16 to stop tilting
+# (4 passes let a 20-box stack rock and fall)
+SETTLE_PASSES = 16
 
 # the warm-start cache: per contact seen last substep, its key and (normal
 # impulse, friction impulse x y z, slip speed), ascending keys (warm_cache.py)
@@ -63,9 +68,10 @@ def contact_params(p, integrator="semi_implicit_euler"):
         p.sleep_angular_speed, p.sleep_time)
     ip = np.empty(N_IP, np.int64)
     ip[[ITERATIONS, POSITION_ITERATIONS, CCD_ITERATIONS, CCD_ON, SLEEP_ON, RULE,
-        RESTITUTION_ITERATIONS]] = (
+        RESTITUTION_ITERATIONS, SHOCK_ON]] = (
         p.iterations, p.position_iterations, p.ccd_iterations, int(p.ccd), int(p.sleep),
-        RESTITUTION_RULES[p.restitution_combine], p.restitution_iterations)
+        RESTITUTION_RULES[p.restitution_combine], p.restitution_iterations,
+        SETTLE_PASSES if p.shock_propagation else 0)
     return fp, ip
 
 

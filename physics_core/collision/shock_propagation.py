@@ -1,0 +1,241 @@
+"""Shock propagation: a last, ordered sweep of the contact solve in which each
+body rests on what holds it (Guendelman, Bridson & Fedkiw 2003, "Nonconvex
+rigid bodies with stacking", section 7; Erleben 2004, ch. 7).
+
+Sequential impulses pass a load down a stack one contact per sweep, and a
+light body between a heavy one and the ground converges at about
+(1 − m_light/m_heavy) per sweep: in 8 sweeps a 20-box stack or a 1,000 kg
+cube on a 1 kg one is far from converged, the residual approach
+velocities sink the bodies into each other and position correction cannot
+keep up (the heavy cube went through the light one).
+
+After the sweeps, bodies get support layers: 0 for the immovable ones
+(static or asleep, zero inverse mass), and 1 + the least layer of the
+bodies they touch otherwise (breadth-first over the contacts). The
+manifolds reaching each layer are then solved once more, layer after
+layer from the lowest up, with the layer below immovable (its side of a
+row takes no impulse and the effective masses are the upper body's
+alone), sweep after sweep until the layer's velocities settle: every
+contact then ends with the upper body not approaching the lower and,
+within the friction cone, not slipping on it, whatever the mass ratio.
+Contacts within one layer are two-sided as usual. Bodies that touch
+nothing immovable (free-flying groups) are not visited, so their momentum
+is kept exactly. This removes the reaction of an upper body on the lower
+within this sweep only: the warm-started sweeps before it carry the
+loads down.
+
+On a converged solve the sweep changes nothing (no contact approaches or
+slips); it only removes what the sweeps left. The warm cache keeps the
+sweeps' own impulses (contact_stages.solve_stage), so the next substep's
+solve starts from its own converging values.
+"""
+import math
+
+import numpy as np
+from numba import njit
+
+from .contact_build import effective_masses
+from .contact_layout import ARM_A, ARM_B, BODY_A, BODY_B, INV_MASS_A, INV_MASS_B, LAM, TURN_A, TURN_B
+from .manifold_friction import COUNT, FIRST, IMA, IMB, M_LAM, TA, TB, _invert, update_anchor
+from .sequential_impulses import update_contact, update_normal
+
+UNREACHED = np.int64(1) << 40
+
+
+@njit(cache=True)
+def _neighbours(I, n):
+    """CSR adjacency of the contact graph: (start (n + 1), other body per entry)."""
+    start = np.zeros(n + 1, np.int64)
+    for c in range(len(I)):
+        start[I[c, BODY_A] + 1] += 1
+        start[I[c, BODY_B] + 1] += 1
+    for i in range(n):
+        start[i + 1] += start[i]
+    fill = start[:-1].copy()
+    other = np.empty(2 * len(I), np.int64)
+    for c in range(len(I)):
+        a, b = I[c, BODY_A], I[c, BODY_B]
+        other[fill[a]] = b
+        fill[a] += 1
+        other[fill[b]] = a
+        fill[b] += 1
+    return start, other
+
+
+@njit(cache=True)
+def support_layers(R, I, n):
+    """(n,) breadth-first layer of every body from the immovable ones (a row
+    side with zero inverse mass) over the contacts; UNREACHED elsewhere."""
+    layer = np.full(n, UNREACHED)
+    queue = np.empty(n, np.int64)
+    tail = 0
+    for c in range(len(I)):
+        for side, body in ((INV_MASS_A, I[c, BODY_A]), (INV_MASS_B, I[c, BODY_B])):
+            if R[c, side] == 0.0 and layer[body] != 0:
+                layer[body] = 0
+                queue[tail] = body
+                tail += 1
+    start, other = _neighbours(I, n)
+    head = 0
+    while head < tail:
+        i = queue[head]
+        head += 1
+        for e in range(start[i], start[i + 1]):
+            j = other[e]
+            if layer[j] == UNREACHED:
+                layer[j] = layer[i] + 1
+                queue[tail] = j
+                tail += 1
+    return layer
+
+
+@njit(cache=True)
+def _freeze_row(R, c, side):
+    """Row c with body `side` (0: a, 1: b) immovable: no impulse reaches it."""
+    R[c, INV_MASS_A if side == 0 else INV_MASS_B] = 0.0
+    turn = TURN_A if side == 0 else TURN_B
+    for i in range(9):
+        R[c, turn + i] = 0.0
+    effective_masses(R, c)
+
+
+@njit(cache=True)
+def _freeze_anchor(M, k, side, w):
+    M[k, IMA if side == 0 else IMB] = 0.0
+    turn = TA if side == 0 else TB
+    for i in range(9):
+        M[k, turn + i] = 0.0
+    _invert(M, k, w)
+
+
+@njit(cache=True)
+def _one_sided(R, I, M, MI, layer, order):
+    """Copies of R and M with the lower side of every cross-layer manifold of
+    `order` immovable."""
+    R1, M1 = R.copy(), M.copy()
+    w = np.empty((3, 3))
+    for k in order:
+        first, count = MI[k, FIRST], MI[k, COUNT]
+        la, lb = layer[I[first, BODY_A]], layer[I[first, BODY_B]]
+        if la == lb:
+            continue
+        side = 0 if la < lb else 1
+        for c in range(first, first + count):
+            _freeze_row(R1, c, side)
+        if count >= 2:
+            _freeze_anchor(M1, k, side, w)
+    return R1, M1
+
+
+@njit(cache=True)
+def _upward_order(I, MI, layer):
+    """Manifolds touching something immovable, by (higher layer, lower layer),
+    key order within (a stable sort: deterministic)."""
+    rank = np.empty(len(MI), np.int64)
+    for k in range(len(MI)):
+        la, lb = layer[I[MI[k, FIRST], BODY_A]], layer[I[MI[k, FIRST], BODY_B]]
+        hi, lo = max(la, lb), min(la, lb)
+        rank[k] = UNREACHED if lo == UNREACHED else hi * (len(layer) + 1) + lo
+    order = np.argsort(rank, kind="mergesort")
+    m = 0
+    while m < len(order) and rank[order[m]] != UNREACHED:
+        m += 1
+    return order[:m]
+
+
+@njit(cache=True)
+def _lever(R, first, count):
+    """The longest lever arm |r × d| of the manifold's rows (m): a change Δω of
+    either body moves a contact point by at most |Δω| times it."""
+    lever = 0.0
+    for c in range(first, first + count):
+        for o in range(0, 9, 3):
+            for arm in (ARM_A + o, ARM_B + o):
+                lever = max(lever, math.sqrt(R[c, arm] ** 2 + R[c, arm + 1] ** 2
+                                             + R[c, arm + 2] ** 2))
+    return lever
+
+
+@njit(cache=True)
+def _velocity_change(vel, omega, a, b, before, lever):
+    """Largest change of either body's contact-point velocity since `before`
+    (v_a, ω_a, v_b, ω_b), m/s."""
+    dv = dw = 0.0
+    for i in range(3):
+        dv = max(dv, max(abs(vel[a, i] - before[i]), abs(vel[b, i] - before[6 + i])))
+        dw = max(dw, max(abs(omega[a, i] - before[3 + i]), abs(omega[b, i] - before[9 + i])))
+    return dv + dw * lever
+
+
+@njit(cache=True)
+def _update(R1, I, M1, MI, k, vel, omega, before):
+    """One update of manifold k; returns the largest change of a contact-point
+    velocity of its bodies it made (m/s)."""
+    first, count = MI[k, FIRST], MI[k, COUNT]
+    a, b = I[first, BODY_A], I[first, BODY_B]
+    for i in range(3):
+        before[i], before[3 + i] = vel[a, i], omega[a, i]
+        before[6 + i], before[9 + i] = vel[b, i], omega[b, i]
+    if count >= 2:
+        for c in range(first, first + count):
+            update_normal(R1, I, c, vel, omega)
+        update_anchor(R1, I, M1, MI, k, vel, omega)
+    else:
+        update_contact(R1, I, first, vel, omega)
+    return _velocity_change(vel, omega, a, b, before, _lever(R1, first, count))
+
+
+@njit(cache=True)
+def _settle(R1, I, M1, MI, group, vel, omega, passes, tolerance, before):
+    """Sweeps over one layer's manifolds `group` (the lower layer immovable),
+    up to `passes`, until a sweep changes no contact-point velocity by more
+    than `tolerance` (m/s; ≤ 0: all passes): the layer's bodies then rest on
+    the one below, solved to convergence (a partly converged box on four
+    corners tilts). The test is on velocities, not impulses: four coplanar
+    corners share a load in many ways, so their impulses can keep trading
+    while the body's velocity has long settled."""
+    for _ in range(passes):
+        change = 0.0
+        for k in group:
+            change = max(change, _update(R1, I, M1, MI, k, vel, omega, before))
+        if tolerance > 0.0 and change < tolerance:
+            return
+
+
+@njit(cache=True)
+def _layer_end(I, MI, layer, order, g):
+    """End of the run of `order` from g whose manifolds reach the same layer."""
+    first = MI[order[g], FIRST]
+    hi = max(layer[I[first, BODY_A]], layer[I[first, BODY_B]])
+    e = g + 1
+    while e < len(order):
+        f = MI[order[e], FIRST]
+        if max(layer[I[f, BODY_A]], layer[I[f, BODY_B]]) != hi:
+            break
+        e += 1
+    return e
+
+
+@njit(cache=True)
+def shock_sweep(R, I, M, MI, vel, omega, n, passes, tolerance):
+    """The ordered one-sided sweep (module docstring), layer after layer from
+    the ground up, each settled in turn (`_settle`); the rows' and anchors'
+    λ updated in place. Returns the number of manifolds visited."""
+    if len(MI) == 0:
+        return 0
+    layer = support_layers(R, I, n)
+    order = _upward_order(I, MI, layer)
+    R1, M1 = _one_sided(R, I, M, MI, layer, order)
+    before = np.empty(12)
+    g = 0
+    while g < len(order):
+        e = _layer_end(I, MI, layer, order, g)
+        _settle(R1, I, M1, MI, order[g:e], vel, omega, passes, tolerance, before)
+        g = e
+    for c in range(len(R)):
+        for r in range(3):
+            R[c, LAM + r] = R1[c, LAM + r]
+    for k in range(len(MI)):
+        for r in range(3):
+            M[k, M_LAM + r] = M1[k, M_LAM + r]
+    return len(order)
