@@ -62,10 +62,11 @@ def _quat_from_z_to(n):
 
 
 class SceneMessages:
-    """Builds the scene update and transforms of one step for one set of shapes."""
+    """Builds the scene update and transforms of one step for one set of
+    shapes (physics_render.Shapes, or a scene Model)."""
 
-    def __init__(self, model):
-        self.shapes = Shapes.from_model(model)
+    def __init__(self, shapes):
+        self.shapes = shapes if isinstance(shapes, Shapes) else Shapes.from_model(shapes)
         s = self.shapes
         self._color = [Color(r=c[0], g=c[1], b=c[2], a=1.0) for c in (s.color(i) for i in range(len(s)))]
         self._event_color = {e: Color(r=c[0], g=c[1], b=c[2], a=1.0) for e, c in EVENT_RGB.items()}

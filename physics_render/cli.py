@@ -12,7 +12,7 @@ from physics_core.shapes import PLANE
 
 from .camera import Camera, frame_scene
 from .draw import Renderer
-from .output import OutputError, check_output, output_kind, write
+from .output import MCAP, OutputError, check_output, output_kind, write
 from .timeline import NS_PER_S, frame_times, scene_frames
 
 DEFAULT_SCENE_DURATION = 3.0  # s
@@ -26,7 +26,8 @@ def build_parser():
     )
     p.add_argument("input", nargs="?", help="scene .yaml or recording .mcap (default: the built-in scene)")
     p.add_argument("--out", help="FILE.gif, FILE.mp4, FILE.png (with --at) or a folder of PNG frames "
-                   "(default: the input's name with .gif, or .png with --at)")
+                   "(default: the input's name with .gif, or .png with --at); from a recording, FILE.mcap writes "
+                   "a copy with Foxglove scene updates at every step")
     p.add_argument("--duration", type=float, metavar="S",
                    help=f"seconds shown (scene default {DEFAULT_SCENE_DURATION:g}; recording default: all of it)")
     p.add_argument("--start", type=float, default=0.0, metavar="S", help="first frame's time (default 0)")
@@ -114,6 +115,8 @@ def render(args):
     still = args.at is not None
     out = args.out or default_out(args.input, still)
     kind = output_kind(out)
+    if kind == MCAP:
+        return _export(args, out)
     if kind == "png" and not still:
         raise OutputError(f"--out {out}: a .png holds one picture; give --at T for a still, or a folder for frames")
     duration = args.duration
@@ -127,6 +130,15 @@ def render(args):
     return out, count, frames, size
 
 
+def _export(args, out):
+    if not (args.input or "").lower().endswith(".mcap"):
+        raise OutputError(f"--out {out}: a Foxglove copy is made from a recording (.mcap), not from a scene")
+    from .foxglove_export import export
+
+    count = export(args.input, out)
+    return out, count, None, None
+
+
 def main(argv=None):
     args = build_parser().parse_args(argv)
     started = time.monotonic()
@@ -135,8 +147,11 @@ def main(argv=None):
     except (OutputError, ValueError, OSError) as exc:
         print(f"physics-render: {exc}", file=sys.stderr, flush=True)
         return 2
-    span = f"t = {frames[0].time:.3f} s" if count == 1 else f"{frames[0].time:.3f}-{frames[-1].time:.3f} s"
     kb = _size_kb(out)
+    if frames is None:
+        print(f"wrote {out}{kb}: the recording and {count} scene updates for Foxglove", flush=True)
+        return 0
+    span = f"t = {frames[0].time:.3f} s" if count == 1 else f"{frames[0].time:.3f}-{frames[-1].time:.3f} s"
     print(f"wrote {count} frame{'s' * (count != 1)} ({size[0]}x{size[1]}, {span}) to {out}{kb} "
           f"in {time.monotonic() - started:.1f} s", flush=True)
     return 0

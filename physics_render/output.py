@@ -6,7 +6,7 @@ import os
 import numpy as np
 from PIL import Image
 
-GIF, MP4, PNG, FOLDER = "gif", "mp4", "png", "folder"
+GIF, MP4, PNG, FOLDER, MCAP = "gif", "mp4", "png", "folder", "mcap"
 
 
 class OutputError(ValueError):
@@ -16,10 +16,11 @@ class OutputError(ValueError):
 def output_kind(path):
     """What `path` asks for: a .gif, a .mp4, a .png, or else a folder of PNG frames."""
     ext = os.path.splitext(str(path))[1].lower()
-    if ext in (".gif", ".mp4", ".png"):
+    if ext in (".gif", ".mp4", ".png", ".mcap"):
         return ext[1:]
     if ext and not os.path.isdir(path):
-        raise OutputError(f"--out {path}: unknown picture type {ext!r}; use .gif, .mp4, .png or a folder")
+        raise OutputError(f"--out {path}: unknown picture type {ext!r}; use .gif, .mp4, .png, a folder, "
+                          "or .mcap (a recording's copy for Foxglove)")
     return FOLDER
 
 

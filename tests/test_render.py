@@ -1,12 +1,23 @@
 """`physics-render`: frame count and size as asked, and bodies drawn where the
 engine (or the recording) put them, checked through the camera's own formula."""
 
+import base64
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
+from foxglove_client import protobuf_class
+from mcap.reader import make_reader
 from mcap.writer import Writer
 from PIL import Image
 from test_node_support import NodeProcess
 
+from geometry_msgs.msg import PoseArray
+from rclpy.serialization import deserialize_message
+from sensor_msgs.msg import PointCloud2
+
+from msg_adapters import arrays_from_pose_array, contacts_from_cloud
 from physics_core import default_scene_path, load_scene
 from physics_node.recording_reader import Recording
 from physics_render import Camera, frame_scene
@@ -177,3 +188,43 @@ def test_cut_recording_renders_up_to_its_last_complete_chunk(recording, tmp_path
     assert render_main([str(cut), "--fps", "20", "--size", "64x48", "--out", str(folder)]) == 0
     expected = sum(1 for _, t in zip(range(100), frame_times(20.0)) if t <= last_pose)  # frames at 0, 0.05, ...
     assert len(list(folder.iterdir())) == expected
+
+
+def test_foxglove_copy_of_a_recording_draws_every_step_at_its_recorded_pose(recording, tmp_path):
+    """The .mcap for Foxglove: every recorded message, plus a scene update per
+    recorded step whose body poses are that step's ~/poses, bit for bit, and
+    whose contact arrows are that step's contact events."""
+    out = tmp_path / "run.foxglove.mcap"
+    assert render_main([str(recording), "--out", str(out)]) == 0
+    with open(out, "rb") as f:
+        reader = make_reader(f)
+        summary = reader.get_summary()
+        scene_channel = next(c for c in summary.channels.values() if c.topic == "/physics/scene")
+        schema = summary.schemas[scene_channel.schema_id]
+        SceneUpdate = protobuf_class({"schemaEncoding": schema.encoding, "schemaName": schema.name,
+                                      "schema": base64.b64encode(schema.data).decode()})
+        poses, contacts, scenes = {}, {}, {}
+        for _schema, channel, message in reader.iter_messages():
+            if channel.topic == "/physics/poses":
+                poses[message.log_time] = arrays_from_pose_array(deserialize_message(message.data, PoseArray))
+            elif channel.topic == "/physics/contacts":
+                contacts[message.log_time] = contacts_from_cloud(deserialize_message(message.data, PointCloud2))
+            elif channel.topic == "/physics/scene":
+                scenes[message.log_time] = SceneUpdate.FromString(message.data)
+    original = sum(1 for m in Recording(recording).messages() if m.topic == "/physics/poses")
+    assert len(scenes) == len(poses) == original
+    for t, update in scenes.items():
+        by_id = {e.id: e for e in update.entities}
+        pos, quat = poses[t]
+        for name, i in (("ball", 1), ("crate", 2), ("bob", 3)):
+            prim = (list(by_id[name].spheres) + list(by_id[name].cubes))[0]
+            p, q = prim.pose.position, prim.pose.orientation
+            assert (p.x, p.y, p.z) == tuple(pos[i]) and (q.w, q.x, q.y, q.z) == tuple(quat[i]), (t, name)
+        assert len(by_id["contacts"].arrows) == len(contacts[t])
+    assert any(len(c) for c in contacts.values()), "the bodies should touch the ground within 1.2 s"
+    # The layout shipped in the repo shows these topics.
+    layout = json.loads((Path(__file__).parents[1] / "foxglove" / "physics_layout.json").read_text())
+    three_d = layout["configById"]["3D!physics"]["topics"]
+    assert three_d["/physics/scene"]["visible"] and three_d["/physics/contacts"]["colorField"] == "event"
+    plotted = layout["configById"]["Plot!bodyheight"]["paths"][0]["value"]
+    assert plotted == "/physics/poses.poses[1].position.z"  # the ball's height
