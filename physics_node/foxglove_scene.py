@@ -23,6 +23,7 @@ from foxglove.messages import (
 )
 
 from msg_adapters import WORLD_FRAME
+from msg_adapters.frames import quat_between_z_and
 from physics_core.shapes import BOX, PLANE, SPHERE
 from physics_render.draw import EVENT_RGB, NORMAL_LENGTH
 from physics_render.shapes import Shapes
@@ -52,15 +53,6 @@ def _quat_from_x_to(v):
     return tuple((q / np.linalg.norm(q)).tolist())
 
 
-def _quat_from_z_to(n):
-    z = np.array([0.0, 0.0, 1.0])
-    c = float(z @ n)
-    if c < -0.999999:
-        return (0.0, 1.0, 0.0, 0.0)
-    q = np.array([1.0 + c, *np.cross(z, n)])
-    return tuple((q / np.linalg.norm(q)).tolist())
-
-
 class SceneMessages:
     """Builds the scene update and transforms of one step for one set of
     shapes (physics_render.Shapes, or a scene Model)."""
@@ -85,7 +77,7 @@ class SceneMessages:
             n = s.plane_normal[i]
             centre = n * (float(s.plane_offset[i]) - 0.5 * PLANE_DRAW_THICKNESS)  # top face on n·x = offset
             size = Vector3(x=PLANE_DRAW_SIZE, y=PLANE_DRAW_SIZE, z=PLANE_DRAW_THICKNESS)
-            prims = {"cubes": [CubePrimitive(pose=_pose(centre, _quat_from_z_to(n)), size=size,
+            prims = {"cubes": [CubePrimitive(pose=_pose(centre, quat_between_z_and(n)), size=size,
                                              color=self._color[i])]}
         return SceneEntity(timestamp=stamp, frame_id=WORLD_FRAME, id=s.names[i], **prims)
 

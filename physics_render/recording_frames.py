@@ -7,20 +7,16 @@ After a world reset sim time starts again at 0; the frames run on in file
 order, so playback time keeps counting from where the part before ended.
 """
 
-import os
-import tempfile
-import warnings
-
-import numpy as np
 from geometry_msgs.msg import PoseArray
 from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import PointCloud2
 from visualization_msgs.msg import MarkerArray
 
 from msg_adapters import arrays_from_pose_array, contacts_from_cloud
-from physics_core import load_scene
-from physics_node.recorder import SCENE_MEDIA_TYPE, SESSION_METADATA
+from physics_node.recorder import SESSION_METADATA
 from physics_node.recording_reader import Recording
+from physics_node.resimulate import ResimulationError
+from physics_node.resimulate import _load_world as load_attached_scene
 
 from .shapes import Shapes
 from .timeline import NS_PER_S, Frame, _ContactWindow
@@ -43,17 +39,12 @@ def open_recording(path):
 
 
 def scene_shapes(recording):
-    """Shapes of the scene attached to the recording, or None if it has none."""
-    scene = recording.attachment(media_type=SCENE_MEDIA_TYPE)
-    if scene is None:
+    """Shapes of the scene attached to the recording (loaded as `--resimulate`
+    loads it), or None if it has none."""
+    try:
+        return Shapes.from_model(load_attached_scene(recording).model)
+    except ResimulationError:
         return None
-    with tempfile.TemporaryDirectory() as tmp:
-        path = os.path.join(tmp, os.path.basename(scene.name) or "scene.yaml")
-        with open(path, "wb") as f:
-            f.write(scene.data)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return Shapes.from_model(load_scene(path).model)
 
 
 class _Playhead:
