@@ -65,7 +65,9 @@ def test_scene_updates_carry_the_poses_of_the_same_sim_time(tmp_path):
             return found
 
         def enough():
-            client.pump(0.05)
+            # Both sides drained in turn: the ROS side at 240 poses a second.
+            client.pump(0.02)
+            driver.spin_for(0.05)
             return len(matched()) >= 5
 
         driver.spin_until(enough, timeout=20.0, what="five scene updates with ~/poses of the same stamp")
@@ -89,6 +91,8 @@ def test_services_pause_step_play_and_reset_the_node(tmp_path):
     node, url = _serve(tmp_path)
     with node, Driver() as driver, FoxgloveClient(url) as client:
         clocks = driver.listen(Clock, "/clock")
+        poses = driver.listen(PoseArray, "/physics/poses")
+        client.subscribe("/physics/scene")
         driver.spin_until(lambda: len(clocks) > 10, what="the node to run")
         paused = client.call("pause")
         assert paused["success"] and paused["paused"]
@@ -102,6 +106,17 @@ def test_services_pause_step_play_and_reset_the_node(tmp_path):
         client.pump_until(lambda: sim_time_ns(answer["sim_time"]) in client.times, 5.0, "the time of the step")
         assert answer["step"] == paused["step"] + 2
         assert abs(answer["sim_time"] - answer["step"] * DT) < 1e-9
+        # While paused every step's scene goes out: the one of this step has its ~/poses.
+        stamp = sim_time_ns(answer["sim_time"])
+        scene_class = protobuf_class(client.channels["/physics/scene"])
+        client.pump_until(lambda: any(_scene_poses(scene_class.FromString(d))[0] == stamp
+                                      for _, d in client.received("/physics/scene")), 5.0, "the step's scene")
+        driver.spin_until(lambda: any(time_ns(m.header.stamp) == stamp for m in poses), what="the step's ~/poses")
+        _, pos, quat = next(p for p in (_scene_poses(scene_class.FromString(d)) for _, d in
+                                        client.received("/physics/scene")) if p[0] == stamp)
+        ros_pos, ros_quat = arrays_from_pose_array(next(m for m in poses if time_ns(m.header.stamp) == stamp))
+        assert np.array_equal(pos, ros_pos[list(BODIES.values())])
+        assert np.array_equal(quat, ros_quat[list(BODIES.values())])
         driver.spin_for(0.3)
         before = time_ns(clocks[-1].clock)
         driver.spin_for(0.3)

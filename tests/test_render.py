@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from foxglove_client import protobuf_class
 from mcap.reader import make_reader
 from mcap.writer import Writer
@@ -54,13 +56,24 @@ def test_camera_formula_puts_the_target_in_the_middle_and_x_to_the_right():
     assert np.all(np.isnan(cam.project(cam.eye - 0.1 * (np.asarray(cam.target) - cam.eye))))
 
 
-def test_framing_fits_every_corner_of_the_box_on_the_picture():
-    lo, hi = np.array([-1.0, -0.5, 0.0]), np.array([2.0, 0.5, 1.5])
-    for azimuth in (-90.0, -45.0, 0.0, 60.0):
-        cam = frame_scene(lo, hi, elevation=25.0, azimuth=azimuth, width=320, height=200)
-        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
-        px = cam.project(corners)
-        assert np.all((px >= 0) & (px <= [320, 200])), (azimuth, px)
+@settings(max_examples=60, deadline=None)
+@given(
+    lo=st.tuples(*[st.floats(-5, 5)] * 3),
+    size=st.tuples(*[st.floats(0.01, 4)] * 3),
+    elevation=st.floats(-85, 85),
+    azimuth=st.floats(-180, 180),
+    fov=st.floats(10, 120),
+    shape=st.sampled_from([(320, 200), (200, 320), (64, 64)]),
+)
+def test_framing_fits_every_corner_of_the_box_on_the_picture(lo, size, elevation, azimuth, fov, shape):
+    lo = np.array(lo)
+    hi = lo + np.array(size)
+    cam = frame_scene(lo, hi, elevation=elevation, azimuth=azimuth, fov=fov, width=shape[0], height=shape[1])
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    px = cam.project(corners)
+    assert np.all((px >= 0) & (px <= shape)), px
+    # And the picture's middle is the box's middle.
+    assert np.allclose(cam.project(0.5 * (lo + hi)), np.array(shape) / 2.0)
 
 
 @pytest.mark.parametrize("azimuth, elevation", [(-70.0, 20.0), (-90.0, 5.0), (30.0, 60.0)])
