@@ -12,7 +12,7 @@ setup(
         ("share/ament_index/resource_index/packages", ["resource/" + PACKAGE]),
         ("share/" + PACKAGE, ["package.xml"]),
         ("share/" + PACKAGE + "/scenes", sorted(glob("scenes/*.yaml"))),
-        ("share/" + PACKAGE + "/foxglove", sorted(glob("foxglove/*.json"))),
+        ("share/" + PACKAGE + "/layouts", sorted(glob("layouts/*.json"))),
     ],
     package_data={"physics_core": ["data/*.yaml"]},
     include_package_data=True,

@@ -236,7 +236,7 @@ def test_foxglove_copy_of_a_recording_draws_every_step_at_its_recorded_pose(reco
         assert len(by_id["contacts"].arrows) == len(contacts[t])
     assert any(len(c) for c in contacts.values()), "the bodies should touch the ground within 1.2 s"
     # The layout shipped in the repo shows these topics.
-    layout = json.loads((Path(__file__).parents[1] / "foxglove" / "physics_layout.json").read_text())
+    layout = json.loads((Path(__file__).parents[1] / "layouts" / "foxglove_physics.json").read_text())
     three_d = layout["configById"]["3D!physics"]["topics"]
     assert three_d["/physics/scene"]["visible"] and three_d["/physics/contacts"]["colorField"] == "event"
     plotted = layout["configById"]["Plot!bodyheight"]["paths"][0]["value"]
