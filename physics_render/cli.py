@@ -55,13 +55,13 @@ def parse_size(text):
     return w, h
 
 
-def load_frames(source, times_ns):
+def load_frames(source, times_ns, span_ns=0):
     """(frames, title) from a scene path (None = built-in) or a recording."""
     if source is not None and source.lower().endswith(".mcap"):
         from .recording_frames import open_recording, recording_frames
 
         recording, node = open_recording(source)
-        frames = list(recording_frames(recording, node, times_ns))
+        frames = list(recording_frames(recording, node, times_ns, span_ns))
         if not frames:
             raise OutputError(f"{source}: no recorded poses at the times asked for (the recording is shorter)")
         return frames, os.path.basename(source)
@@ -71,7 +71,7 @@ def load_frames(source, times_ns):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # a render need not repeat the loader's notes
         world = load_scene(path)
-    return list(scene_frames(world, times_ns)), os.path.basename(path)
+    return list(scene_frames(world, times_ns, span_ns)), os.path.basename(path)
 
 
 def bounds(frames):
@@ -123,7 +123,8 @@ def render(args):
     if duration is None and not (args.input or "").lower().endswith(".mcap"):
         duration = DEFAULT_SCENE_DURATION
     check_output(out, kind, size)
-    frames, title = load_frames(args.input, frame_times(args.fps, duration, args.at, args.start))
+    span_ns = 0 if still else int(round(NS_PER_S / args.fps)) if args.fps > 0 else 0
+    frames, title = load_frames(args.input, frame_times(args.fps, duration, args.at, args.start), span_ns)
     camera = camera_for(args, frames, size)
     renderer = Renderer(camera, shadows=not args.no_shadows, title=title)
     count = write(out, kind, (renderer.render(f) for f in frames), args.fps)

@@ -80,8 +80,9 @@ class _Playhead:
         return Frame(t / NS_PER_S, sim_ns / NS_PER_S, step, pos, quat, point, normal, event, shapes, self.part)
 
 
-def recording_frames(recording, node, times_ns):
-    """Frames at the given playback times (ns, increasing) until the recording ends."""
+def recording_frames(recording, node, times_ns, span_ns=0):
+    """Frames at the given playback times (ns, increasing) until the recording
+    ends; `span_ns` as in timeline.scene_frames."""
     poses_topic, contacts_topic, bodies_topic = f"{node}/poses", f"{node}/contacts", f"{node}/bodies"
     scene = scene_shapes(recording)
     head = _Playhead(scene)
@@ -98,7 +99,7 @@ def recording_frames(recording, node, times_ns):
             head.shapes = scene if scene is not None and len(scene) == len(marked) else marked
         elif m.topic == contacts_topic and head.pose is not None:
             c = contacts_from_cloud(deserialize_message(m.data, PointCloud2))
-            window.add(c.point, c.normal, c.event)
+            window.add(c.point, c.normal, c.event, in_span=t is not None and head.pose[0] > t - span_ns)
         elif m.topic == poses_topic:
             # Every frame before this pose shows the one before it.
             arrival = head.playback_of(m.log_time)

@@ -61,34 +61,38 @@ def step_at(time_ns, dt):
 
 
 class _ContactWindow:
-    """Contact events since the last frame: begins and ends all kept, persists of the latest step."""
+    """Contact events a frame shows: every event of the step it shows, and the
+    begins and ends of the earlier steps within its span (the time since the
+    previous frame; none for a still), each shown once."""
 
     def __init__(self):
-        self._transient = []
-        self._latest = None
+        self._earlier = []
+        self._latest = None  # (point, normal, event) of the last step added
+        self._latest_counts = False  # within the next frame's span and not yet shown
 
-    def add(self, point, normal, event):
-        event = np.asarray(event, dtype=np.uint8)
-        keep = event != PERSIST
-        if keep.any():
-            self._transient.append((point[keep], normal[keep], event[keep]))
-        self._latest = (point[~keep], normal[~keep], event[~keep])
+    def add(self, point, normal, event, in_span=True):
+        if self._latest is not None and self._latest_counts:
+            p, n, e = self._latest
+            keep = e != PERSIST
+            if keep.any():
+                self._earlier.append((p[keep], n[keep], e[keep]))
+        self._latest = (np.asarray(point), np.asarray(normal), np.asarray(event, dtype=np.uint8))
+        self._latest_counts = bool(in_span)
 
     def take(self):
-        parts = list(self._transient)
+        parts = list(self._earlier)
         if self._latest is not None:
             parts.append(self._latest)
-        self._transient = []
+        self._earlier, self._latest_counts = [], False
         if not parts:
             return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, dtype=np.uint8)
         return tuple(np.concatenate([p[i] for p in parts]) for i in range(3))
 
-    def reset(self):
-        self._transient, self._latest = [], None
 
-
-def scene_frames(world, times_ns):
-    """Frames of `world` stepped from its current state, one per time."""
+def scene_frames(world, times_ns, span_ns=0):
+    """Frames of `world` stepped from its current state, one per time;
+    `span_ns` is how far back a frame's begin and end events reach (the
+    frame period; 0 for a still)."""
     shapes = Shapes.from_model(world.model)
     window = _ContactWindow()
     for t in times_ns:
@@ -98,7 +102,7 @@ def scene_frames(world, times_ns):
         while world.step_index < target:
             world.step()
             c = world.contacts
-            window.add(np.asarray(c.point), np.asarray(c.normal), np.asarray(c.event))
+            window.add(c.point, c.normal, c.event, in_span=round(world.time * NS_PER_S) > t - span_ns)
         if world.model is not None and len(world.model.names) != len(shapes):
             shapes = Shapes.from_model(world.model)
         point, normal, event = window.take()

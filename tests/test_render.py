@@ -241,3 +241,29 @@ def test_foxglove_copy_of_a_recording_draws_every_step_at_its_recorded_pose(reco
     assert three_d["/physics/scene"]["visible"] and three_d["/physics/contacts"]["colorField"] == "event"
     plotted = layout["configById"]["Plot!bodyheight"]["paths"][0]["value"]
     assert plotted == "/physics/poses.poses[1].position.z"  # the ball's height
+
+
+def test_still_shows_only_its_own_steps_contact_events():
+    """A still once showed every `begin` since t = 0 (the whole pyramid green
+    at 1 s). A still shows the events of its own step; a clip frame also the
+    begins and ends of the steps since the frame before, each once."""
+    pyramid = str(Path(__file__).parents[1] / "scenes" / "pyramid_10.yaml")
+    reference = load_scene(pyramid)
+    per_step = [np.zeros(0, dtype=np.uint8)]  # events of step k (step 0: none yet)
+    for _ in range(19):
+        reference.step()
+        per_step.append(np.asarray(reference.contacts.event).copy())
+    t = int(0.04 * NS_PER_S)
+    k1, k2 = step_at(t, reference.dt), step_at(2 * t, reference.dt)  # 9 and 19
+
+    def expected(first_step, last_step):
+        transient = [e[e != 1] for e in per_step[first_step:last_step]]
+        return np.sort(np.concatenate(transient + [per_step[last_step]]))
+
+    (still,) = scene_frames(load_scene(pyramid), [t], span_ns=0)
+    assert np.array_equal(np.sort(still.contact_event), np.sort(per_step[k1]))
+    first, second, third = scene_frames(load_scene(pyramid), [0, t, 2 * t], span_ns=t)
+    assert len(first.contact_event) == 0  # before the first step
+    assert np.array_equal(np.sort(second.contact_event), expected(1, k1))
+    assert np.count_nonzero(second.contact_event == 0) >= 300  # the boxes' first touches, from step 1
+    assert np.array_equal(np.sort(third.contact_event), expected(k1 + 1, k2))
