@@ -22,6 +22,7 @@ import threading
 import time
 
 from rclpy.clock import Clock, ClockType
+from rclpy.qos import DurabilityPolicy
 from std_srvs.srv import Empty, Trigger
 
 from msg_adapters import ros2msg_schema, sim_time_ns, type_name
@@ -77,6 +78,8 @@ class FoxgloveBridge:
         self._calls = queue.Queue()
         self._channels = {}  # topic -> foxglove Channel
         self._last_scene = self._last_time = -1e9
+        self._late_subscriber = threading.Event()  # set by the server's thread, served on the node's
+        self.tap = None
 
     # -- set-up ------------------------------------------------------------------
     def attach(self, node, recorder):
@@ -99,12 +102,14 @@ class FoxgloveBridge:
                 capabilities=[fg.Capability.Time, fg.Capability.Services],
                 supported_encodings=["json"],
                 services=[self._service(name) for name in SERVICES],
+                server_listener=_Listener(self._late_subscriber),
                 context=self.context,
             )
         except Exception as exc:  # the SDK raises its own error types for a bind failure
             raise FoxgloveError(f"--foxglove: cannot serve on {self.host}:{self.port}: {exc}") from exc
         node.create_timer(SERVICE_POLL_S, self.serve_calls, clock=Clock(clock_type=ClockType.STEADY_TIME))
-        return OutputTap(recorder, self, prefix + "/poses")
+        self.tap = OutputTap(recorder, self, prefix + "/poses")
+        return self.tap
 
     @property
     def url(self):
@@ -125,12 +130,12 @@ class FoxgloveBridge:
             self._channels[topic] = ch
         return ch
 
-    def state_sent(self, time_ns):
+    def state_sent(self, time_ns, force=False):
         """The node sent a step's poses: the scene and transforms of that step,
         throttled to `rate` while running (every one while paused: steps and resets)."""
         now = time.monotonic()
         node = self.node
-        if not node.paused and now - self._last_scene < 1.0 / self.rate:
+        if not (force or node.paused) and now - self._last_scene < 1.0 / self.rate:
             return
         self._last_scene = now
         s = node.world.state
@@ -169,7 +174,13 @@ class FoxgloveBridge:
 
     def serve_calls(self):
         """On the node's thread (a timer): the pending service calls, through
-        the same handlers as the node's ROS services."""
+        the same handlers as the node's ROS services; and, for a client that
+        has just subscribed, the world as it is now (a paused node sends
+        nothing by itself) and the last message of each latched topic."""
+        if self._late_subscriber.is_set():
+            self._late_subscriber.clear()
+            self.tap.resend_latched()
+            self.state_sent(sim_time_ns(self.node.world.time), force=True)
         while True:
             try:
                 name, done, result = self._calls.get_nowait()
@@ -197,6 +208,16 @@ class FoxgloveBridge:
         return {"success": True, "message": {"pause": "paused", "play": "running", "reset": "world reset"}[name]}
 
 
+class _Listener:
+    """The server's callbacks (on its own thread): a subscription only raises a flag."""
+
+    def __init__(self, flag):
+        self._flag = flag
+
+    def on_subscribe(self, client, channel):
+        self._flag.set()
+
+
 class OutputTap:
     """What the node's Outputs write to in place of the recorder: each message
     goes to the recorder (if any) and to the bridge's channel of its topic;
@@ -208,6 +229,8 @@ class OutputTap:
         self.poses_topic = poses_topic
         self._ids = []  # tap channel id -> (recorder channel id, foxglove channel, is the poses topic)
         self._index = {}
+        self._latched = set()  # tap ids of transient-local topics (/clock, ~/bodies)
+        self._last = {}  # tap id -> (data, time ns) of its latest message, for latched topics
 
     @property
     def path(self):
@@ -223,6 +246,8 @@ class OutputTap:
             self._ids.append((rid, self.bridge.channel(topic, msg_class), topic == self.poses_topic))
             cid = len(self._ids) - 1
             self._index[key] = cid
+            if qos is not None and qos.durability == DurabilityPolicy.TRANSIENT_LOCAL:
+                self._latched.add(cid)
         return cid
 
     def write(self, topic, msg_class, data, time_ns, step=0, qos=None):
@@ -233,10 +258,19 @@ class OutputTap:
         if self.recorder is not None:
             self.recorder.write_many([r[0] for r in rows], datas, time_ns, step)
         poses = False
-        for (_, ch, is_poses), data in zip(rows, datas):
-            ch.log(bytes(data), log_time=int(time_ns))
+        for cid, (_, ch, is_poses), data in zip(channel_ids, rows, datas):
+            data = bytes(data)
+            ch.log(data, log_time=int(time_ns))
             poses = poses or is_poses
+            if cid in self._latched:
+                self._last[cid] = (data, int(time_ns))
         if poses:
             self.bridge.state_sent(time_ns)
         else:
             self.bridge.send_time(time_ns)
+
+    def resend_latched(self):
+        """The last message of each transient-local topic again, for a client
+        that subscribed after it was sent (as a ROS late joiner gets it)."""
+        for cid, (data, time_ns) in list(self._last.items()):
+            self._ids[cid][1].log(data, log_time=time_ns)

@@ -14,6 +14,7 @@ from geometry_msgs.msg import PoseArray
 from rclpy.serialization import deserialize_message
 from rosgraph_msgs.msg import Clock
 from std_srvs.srv import Trigger
+from visualization_msgs.msg import MarkerArray
 
 from msg_adapters import arrays_from_pose_array, sim_time_ns, time_ns
 from physics_core import default_scene_path, load_scene
@@ -140,3 +141,23 @@ def test_a_taken_port_is_a_clear_error(tmp_path):
         with NodeProcess(["--foxglove", port], tmp_path) as node:
             assert node.wait(30.0) == 2
             assert f"cannot serve on 127.0.0.1:{port}" in node.log()
+
+
+def test_a_client_of_a_paused_node_sees_the_world_at_once(tmp_path):
+    """A paused node sends nothing by itself: a client subscribing then still
+    gets the scene as it is and the latched ~/bodies, as a ROS late joiner would."""
+    node, url = _serve(tmp_path, "--paused")
+    with node, FoxgloveClient(url) as client:
+        client.pump(1.0)  # the node is up and idle; nothing is subscribed yet
+        client.subscribe("/physics/scene")
+        client.subscribe("/physics/bodies")
+        client.pump_until(lambda: client.received("/physics/scene") and client.received("/physics/bodies"), 10.0,
+                          "the current scene and the bodies")
+        scene_class = protobuf_class(client.channels["/physics/scene"])
+        stamp, pos, _ = _scene_poses(scene_class.FromString(client.received("/physics/scene")[-1][1]))
+        assert stamp == 0
+        initial = load_scene(default_scene_path()).state.pos
+        assert np.array_equal(pos, initial[list(BODIES.values())])
+        bodies = deserialize_message(client.received("/physics/bodies")[-1][1], MarkerArray)
+        assert [m.ns for m in bodies.markers] == ["ground", *BODIES]
+        assert 0 in client.times  # the server's time is the paused sim time
