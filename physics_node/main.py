@@ -16,8 +16,8 @@ from rclpy.signals import SignalHandlerOptions
 
 from physics_core import SceneError
 
-from .node import PhysicsNode
 from .foxglove_server import FoxgloveError
+from .node import PhysicsNode
 from .parameters import ODOMETRY_MODES, ParameterValueError
 
 
