@@ -7,7 +7,9 @@ PACKAGE = "physics_node"
 setup(
     name=PACKAGE,
     version="0.1.0",
-    packages=find_packages(include=["physics_core*", "physics_node*", "physics_render*", "msg_adapters*", "benchmarks*"]),
+    packages=find_packages(
+        include=["physics_core*", "physics_node*", "physics_render*", "msg_adapters*", "benchmarks*"]
+    ),
     data_files=[
         ("share/ament_index/resource_index/packages", ["resource/" + PACKAGE]),
         ("share/" + PACKAGE, ["package.xml"]),

@@ -58,7 +58,8 @@ def plane_patch(normal, offset, around, half_size):
     spacing = _nice_spacing(half_size / 8.0)
     ca, cb = np.round(foot @ a / spacing) * spacing, np.round(foot @ b / spacing) * spacing
     origin = foot - (foot @ a) * a - (foot @ b) * b + ca * a + cb * b
-    corners = np.array([origin + sa * half_size * a + sb * half_size * b for sa, sb in ((-1, -1), (1, -1), (1, 1), (-1, 1))])
+    signs = ((-1, -1), (1, -1), (1, 1), (-1, 1))
+    corners = np.array([origin + sa * half_size * a + sb * half_size * b for sa, sb in signs])
     ticks = np.arange(-half_size, half_size + 0.5 * spacing, spacing)
     segments = [(origin + s * a - half_size * b, origin + s * a + half_size * b) for s in ticks]
     segments += [(origin + s * b - half_size * a, origin + s * b + half_size * a) for s in ticks]

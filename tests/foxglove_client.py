@@ -97,7 +97,8 @@ class FoxgloveClient:
         self.pump_until(lambda: topic in self.channels, timeout, f"channel {topic} to be advertised")
         sub = self._next_id
         self._next_id += 1
-        self.ws.send(json.dumps({"op": "subscribe", "subscriptions": [{"id": sub, "channelId": self.channels[topic]["id"]}]}))
+        subscription = {"id": sub, "channelId": self.channels[topic]["id"]}
+        self.ws.send(json.dumps({"op": "subscribe", "subscriptions": [subscription]}))
         self._subscriptions[topic] = sub
         self.messages[sub] = []
         return sub
