@@ -7,11 +7,14 @@ PACKAGE = "physics_node"
 setup(
     name=PACKAGE,
     version="0.1.0",
-    packages=find_packages(include=["physics_core*", "physics_node*", "msg_adapters*", "benchmarks*"]),
+    packages=find_packages(
+        include=["physics_core*", "physics_node*", "physics_render*", "msg_adapters*", "benchmarks*"]
+    ),
     data_files=[
         ("share/ament_index/resource_index/packages", ["resource/" + PACKAGE]),
         ("share/" + PACKAGE, ["package.xml"]),
         ("share/" + PACKAGE + "/scenes", sorted(glob("scenes/*.yaml"))),
+        ("share/" + PACKAGE + "/layouts", sorted(glob("layouts/*.json"))),
     ],
     package_data={"physics_core": ["data/*.yaml"]},
     include_package_data=True,
@@ -19,8 +22,12 @@ setup(
     install_requires=["numpy>=1.24", "pyyaml>=6", "mcap>=1.1", "numba>=0.60"],
     extras_require={
         "ros": ["ros-jazzy-rclpy", "ros-jazzy-rmw-fastrtps-cpp", "ros-jazzy-common-interfaces"],
-        "test": ["pytest>=7", "hypothesis>=6", "rosbags>=0.10"],
+        "test": ["pytest>=7", "hypothesis>=6", "rosbags>=0.10", "websockets>=12", "protobuf>=4"],
         "bench": ["matplotlib>=3.7"],
+        # physics-render: matplotlib draws, Pillow writes GIF/PNG, imageio + its ffmpeg binary write MP4.
+        "render": ["matplotlib>=3.7", "pillow>=9", "imageio>=2.30", "imageio-ffmpeg>=0.4.9"],
+        # physics-node --foxglove: the Foxglove WebSocket server (tests talk to it with websockets + protobuf).
+        "foxglove": ["foxglove-sdk>=0.30"],
         "compare": ["pybullet", "mujoco"],
     },
     zip_safe=True,
@@ -33,6 +40,7 @@ setup(
             "physics_node = physics_node.main:main",
             "physics-replay = physics_node.replay:main",
             "physics-bench = benchmarks.cli:main",
+            "physics-render = physics_render.cli:main",
         ],
     },
 )

@@ -16,6 +16,7 @@ from rclpy.signals import SignalHandlerOptions
 
 from physics_core import SceneError
 
+from .foxglove_server import FoxgloveError
 from .node import PhysicsNode
 from .parameters import ODOMETRY_MODES, ParameterValueError
 
@@ -37,6 +38,19 @@ def build_parser():
         help="per-body odometry: only to topics with a subscriber (default) or every body every step",
     )
     p.add_argument(
+        "--foxglove",
+        nargs="?",
+        type=int,
+        const=DEFAULT_FOXGLOVE_PORT,
+        metavar="PORT",
+        help=f"serve the live world to the Foxglove app over its WebSocket protocol (port {DEFAULT_FOXGLOVE_PORT} "
+        "if none given; 0 = any free port)",
+    )
+    p.add_argument("--foxglove-host", default="127.0.0.1", metavar="HOST",
+                   help="address the Foxglove server listens on (default 127.0.0.1: this machine only; 0.0.0.0: all)")
+    p.add_argument("--foxglove-rate", type=float, default=30.0, metavar="HZ",
+                   help="scene updates per wall second while running (default 30; every step while paused)")
+    p.add_argument(
         "--executor",
         choices=EXECUTORS,
         default="events",
@@ -44,6 +58,18 @@ def build_parser():
         "or 'single' (rclpy's SingleThreadedExecutor)",
     )
     return p
+
+
+DEFAULT_FOXGLOVE_PORT = 8765
+
+
+def foxglove_bridge(args):
+    """The Foxglove server asked for by --foxglove, or None."""
+    if args.foxglove is None:
+        return None
+    from .foxglove_server import FoxgloveBridge
+
+    return FoxgloveBridge(args.foxglove, args.foxglove_host, args.foxglove_rate)
 
 
 # rclpy's SingleThreadedExecutor rebuilds a wait set of every subscription,
@@ -144,9 +170,12 @@ def main(argv=None):
     node = None
     status = 0
     try:
-        node = PhysicsNode(parameter_overrides=parameter_overrides(args))
+        node = PhysicsNode(parameter_overrides=parameter_overrides(args), foxglove=foxglove_bridge(args))
         try:
             print(how_to_push(node), flush=True)
+            if node.foxglove is not None:
+                print(f"physics: Foxglove server at {node.foxglove.url} "
+                      "(Foxglove app: Open connection -> Foxglove WebSocket)", flush=True)
         except OSError:
             pass  # no usable stdout (closed pipe): the node runs on regardless
         executor = make_executor(args.executor)
@@ -157,7 +186,7 @@ def main(argv=None):
             node.get_logger().info(f"{stop.signal_name}: stopping")
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
-    except (SceneError, ParameterValueError) as exc:
+    except (SceneError, ParameterValueError, FoxgloveError) as exc:
         print(f"physics-node: {exc}", file=sys.stderr, flush=True)
         status = 2
     finally:

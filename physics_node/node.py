@@ -56,8 +56,10 @@ SUBSCRIBER_SCAN_PARTS = 10
 
 
 class PhysicsNode(Node):
-    def __init__(self, parameter_overrides=None):
+    def __init__(self, parameter_overrides=None, foxglove=None):
+        """`foxglove`: a foxglove_server.FoxgloveBridge to serve the world to Foxglove, or None."""
         super().__init__(NODE_NAME, parameter_overrides=parameter_overrides or [])
+        self.foxglove = foxglove
         self.settings = declare(self)
         self.scene_path = self.settings.scene or default_scene_path()
         # The loader warns about what it had to assume (e.g. friction pairs
@@ -92,7 +94,8 @@ class PhysicsNode(Node):
 
     def _connect(self):
         """Publishers, subscriptions, services and timers; first outputs."""
-        self.outputs = Outputs(self, self.model, self.recorder, odometry=self.settings.odometry)
+        sink = self.recorder if self.foxglove is None else self.foxglove.attach(self, self.recorder)
+        self.outputs = Outputs(self, self.model, sink, odometry=self.settings.odometry)
         if self.recorder is not None:
             self._start_recording()
 
@@ -145,9 +148,11 @@ class PhysicsNode(Node):
         )
 
     def close(self):
-        """Finish the recording, if any. Called on every exit path."""
+        """Finish the recording, if any, and stop serving Foxglove. Called on every exit path."""
         if self.recorder is not None:
             self.recorder.close()
+        if self.foxglove is not None:
+            self.foxglove.close()
 
     # -- stepping -----------------------------------------------------------
     def _on_tick(self):
