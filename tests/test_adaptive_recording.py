@@ -23,14 +23,17 @@ bodies:
   - name: ground
     shape: {type: plane}
     static: true
+    material: steel
   - name: ball
     shape: {type: sphere, radius: 0.1}
     mass: 1.0
+    material: steel
     position: [0, 0, 0.5]
     velocity: [0.2, 0, 0]
   - name: bob
     shape: {type: sphere, radius: 0.05}
     mass: 1.0
+    material: steel
     position: [1.01, 0, 1.0]
 springs:
   - {a: bob, b: world, stiffness: 1.0e+6, point_b: [1.0, 0, 1.0]}
