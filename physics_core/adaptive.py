@@ -182,6 +182,20 @@ def _proposal(h_try, h, last, err, params, stats, may_grow):
 
 
 @njit(cache=True)
+def _taken(err, h_try, params):
+    """Whether a trial step is taken: within tolerance, forced at min_step, or
+    non-finite (taken once, so that the finite check names the bodies)."""
+    return err <= 1.0 or h_try <= params[MIN_STEP] or err != err
+
+
+@njit(cache=True)
+def _first_size(stats, params):
+    """The carried-over proposal, or max_step on a fresh controller."""
+    h = stats[H_NEXT] if stats[H_NEXT] > 0.0 else params[MAX_STEP]
+    return min(h, params[MAX_STEP])
+
+
+@njit(cache=True)
 def advance(span, data, state, body, loads, model_torque, adaptive, work, prof):
     """Integrate the force effects over [t, t + span] (s) with error control;
     state = (pos, quat, vel, omega) updated in place; body = (inv_mass,
@@ -191,7 +205,7 @@ def advance(span, data, state, body, loads, model_torque, adaptive, work, prof):
     pos, quat, vel, omega = state
     inertia, iso = body[1], body[3]
     rotating = model_torque or loads[4] or spins(omega)
-    h = min(stats[H_NEXT] if stats[H_NEXT] > 0.0 else params[MAX_STEP], params[MAX_STEP])
+    h = _first_size(stats, params)
     t, fresh, may_grow = 0.0, True, True
     load_start(rotating, pos, quat, vel, omega, inertia, iso, scratch[1])
     while t < span:
@@ -201,7 +215,7 @@ def advance(span, data, state, body, loads, model_torque, adaptive, work, prof):
                               scratch, work, prof)
         _count(stats, EVALS, evals)
         fresh = False
-        if err <= 1.0 or h_try <= params[MIN_STEP] or err != err:
+        if _taken(err, h_try, params):
             commit(rotating, scratch[2], pos, quat, vel, omega, body[2], iso)
             _record_accepted(stats, h_try, err, not err <= 1.0)
             if err != err:

@@ -135,9 +135,9 @@ def test_a_min_step_above_what_the_tolerance_needs_is_counted_not_fatal():
 # ---- contacts ------------------------------------------------------------------
 
 def _bouncing(integrator, substeps):
-    ground = {"name": "ground", "shape": {"type": "plane"}, "static": True, "material": "concrete"}
+    ground = {"name": "ground", "shape": {"type": "plane"}, "static": True, "material": "steel"}
     ball = sphere("ball", radius=0.1, mass=1.0, position=(0.0, 0.0, 1.0), restitution=0.8,
-                  velocity=[0.3, 0.0, 0.0], material="rubber")
+                  velocity=[0.3, 0.0, 0.0], material="steel")
     return scene(ground, ball, integrator=integrator, gravity="earth", dt=1 / 120,
                  substeps=substeps, effects={"contacts": {}})
 
