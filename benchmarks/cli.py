@@ -75,7 +75,8 @@ def parser():
         s.add_argument("--out", default=DEFAULT_OUT, help="output folder (default: %(default)s)")
         if name in ("accuracy", "all"):
             s.add_argument("--only", nargs="+", metavar="PROBLEM",
-                           help="accuracy problems to run (harmonic damped drag_fall kepler free_top)")
+                           help="accuracy problems to run (harmonic damped drag_fall kepler "
+                                "kepler_e09 stiff_spring free_top)")
     return p
 
 

@@ -32,6 +32,10 @@ class Problem:
     full: Dict[str, Tuple[int, int]]
     build: Callable[[str, float, int], dict]    # (integrator, dt, substeps) -> scene dict
     error: Callable[[object], float]            # finished World -> relative error
+    adaptive_dt: float = 0.0                    # s, output step of the adaptive runs (0: time_scale / 16)
+
+    def adaptive_step(self):
+        return self.adaptive_dt or self.time_scale / 16
 
     def dts(self, integrator, quick):
         """Step sizes from coarse to fine, halving."""
@@ -144,22 +148,29 @@ KEPLER_MU = G * (SUN + PLANET)
 KEPLER_PERIOD = 2.0 * math.pi * math.sqrt(KEPLER_A ** 3 / KEPLER_MU)
 
 
-def _kepler_build(integrator, dt, substeps):
-    r0, v0 = cf.kepler(0.0, KEPLER_MU, KEPLER_A, KEPLER_E)
-    total = SUN + PLANET
-    # centre of mass at rest at the origin
-    return {"dt": dt, "substeps": substeps, "integrator": integrator,
-            "effects": {"gravitation": {"G": G, "softening": 1e-9}},
-            "bodies": [_sphere("sun", SUN, position=(-PLANET / total * r0).tolist(),
-                               velocity=(-PLANET / total * v0).tolist()),
-                       _sphere("planet", PLANET, position=(SUN / total * r0).tolist(),
-                               velocity=(SUN / total * v0).tolist())]}
+def _kepler_build_for(e):
+    def build(integrator, dt, substeps):
+        r0, v0 = cf.kepler(0.0, KEPLER_MU, KEPLER_A, e)
+        total = SUN + PLANET
+        # centre of mass at rest at the origin
+        return {"dt": dt, "substeps": substeps, "integrator": integrator,
+                "effects": {"gravitation": {"G": G, "softening": 1e-9}},
+                "bodies": [_sphere("sun", SUN, position=(-PLANET / total * r0).tolist(),
+                                   velocity=(-PLANET / total * v0).tolist()),
+                           _sphere("planet", PLANET, position=(SUN / total * r0).tolist(),
+                                   velocity=(SUN / total * v0).tolist())]}
+    return build
 
 
-def _kepler_error(world):
-    r, _ = cf.kepler(world.time, KEPLER_MU, KEPLER_A, KEPLER_E)
-    rel = world.body("planet").position - world.body("sun").position
-    return float(np.linalg.norm(rel - r)) / KEPLER_A
+def _kepler_error_for(e):
+    def error(world):
+        r, _ = cf.kepler(world.time, KEPLER_MU, KEPLER_A, e)
+        rel = world.body("planet").position - world.body("sun").position
+        return float(np.linalg.norm(rel - r)) / KEPLER_A
+    return error
+
+
+_kepler_build, _kepler_error = _kepler_build_for(KEPLER_E), _kepler_error_for(KEPLER_E)
 
 
 KEPLER = Problem(
@@ -171,6 +182,52 @@ KEPLER = Problem(
     full={"explicit_euler": (16384, 131072), "semi_implicit_euler": (256, 16384),
           "velocity_verlet": (128, 8192), "rk4": (64, 4096)},
     build=_kepler_build, error=_kepler_error)
+
+
+# Kepler at e = 0.9: periapsis at a(1 − e) = 0.1, where the planet moves
+# √19 ≈ 4.4 times faster than on a circle and the time scale r/v is ~300 times
+# shorter than at apoapsis: the case where a fixed step wastes its work.
+ECCENTRIC_E = 0.9
+ECCENTRIC = Problem(
+    key="kepler_e09", title="Eccentric Kepler orbit (e = 0.9)",
+    exact="Kepler's equation M = E − e sin E, relative orbit of a two-body system, G = 1",
+    time_scale=KEPLER_PERIOD, horizon=(1.25 * KEPLER_PERIOD, 3.25 * KEPLER_PERIOD),
+    quick={"explicit_euler": (65536, 131072), "semi_implicit_euler": (2048, 16384),
+           "velocity_verlet": (1024, 16384), "rk4": (256, 4096)},
+    full={"explicit_euler": (65536, 262144), "semi_implicit_euler": (1024, 65536),
+          "velocity_verlet": (512, 65536), "rk4": (128, 16384)},
+    build=_kepler_build_for(ECCENTRIC_E), error=_kepler_error_for(ECCENTRIC_E))
+
+
+# ---- stiff spring: k = 1e6 N/m on 1 kg, ω₀ = 1000 rad/s ----------------------
+# At the node's usual 240 Hz a fixed integrator is unstable by itself (ω dt ≈ 4);
+# the World then adds spring substeps (World.spring_substeps), the adaptive
+# integrator's controller finds the stable size on its own.
+STIFF_K, STIFF_X0 = 1e6, 0.01
+STIFF_W0 = math.sqrt(STIFF_K / OSC_MASS)
+
+
+def _stiff_build(integrator, dt, substeps):
+    return {"dt": dt, "substeps": substeps, "integrator": integrator,
+            "bodies": [_sphere("bob", OSC_MASS, position=[STIFF_X0, 0.0, 0.0])],
+            "springs": [{"a": "bob", "b": "world", "stiffness": STIFF_K, "rest_length": 0.0}]}
+
+
+def _stiff_error(world):
+    b = world.body("bob")
+    x, v = cf.harmonic(world.time, STIFF_W0, STIFF_X0, 0.0)
+    return math.hypot(b.position[0] - x, (b.velocity[0] - v) / STIFF_W0) / STIFF_X0
+
+
+STIFF = Problem(
+    key="stiff_spring", title="Stiff spring (k = 1e6 N/m)",
+    exact="x = x₀ cos ω₀t, ω₀ = 1000 rad/s (spring k = 10⁶ N/m, m = 1 kg, x₀ = 1 cm)",
+    time_scale=2.0 * math.pi / STIFF_W0, horizon=(0.05, 0.2),
+    quick={"explicit_euler": (2048, 8192), "semi_implicit_euler": (32, 512),
+           "velocity_verlet": (16, 256), "rk4": (8, 128)},
+    full={"explicit_euler": (2048, 32768), "semi_implicit_euler": (16, 2048),
+          "velocity_verlet": (8, 1024), "rk4": (4, 512)},
+    build=_stiff_build, error=_stiff_error, adaptive_dt=1.0 / 240.0)
 
 
 # ---- torque-free asymmetric top ---------------------------------------------
@@ -204,4 +261,4 @@ TOP = Problem(
     build=_top_build, error=_top_error)
 
 
-PROBLEMS = (HARMONIC, DAMPED, DRAG_FALL, KEPLER, TOP)
+PROBLEMS = (HARMONIC, DAMPED, DRAG_FALL, KEPLER, ECCENTRIC, STIFF, TOP)

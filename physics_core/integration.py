@@ -185,7 +185,7 @@ def forces(data, pos, quat, vel, omega, user_force, user_force_offset, user_torq
 
 
 @njit(cache=True, inline="always")
-def _forces_at(data, loads, pos, quat, vel, omega, F, T, prof):
+def forces_at(data, loads, pos, quat, vel, omega, F, T, prof):
     """`forces` with the held loads as one tuple (user_force, offset, torque, has_force, has_torque)."""
     _all_forces(data, pos, quat, vel, omega, loads[0], loads[1], loads[2], loads[3], loads[4], F, T, prof)
 
@@ -200,7 +200,7 @@ def _euler(semi, h, data, state, body, loads, rotating, work, prof):
     pos, quat, vel, omega = state
     inv_mass, inertia, inv_inertia, iso = body
     F, T = work[0], work[1]
-    _forces_at(data, loads, pos, quat, vel, omega, F, T, prof)
+    forces_at(data, loads, pos, quat, vel, omega, F, T, prof)
     if semi:
         semi_implicit_update(pos, quat, vel, omega, F, T, inv_mass, inertia, inv_inertia, iso, h, rotating)
     else:
@@ -218,7 +218,7 @@ def _verlet(h, data, state, body, loads, rotating, work, prof):
     for end in range(2):                     # one call site: the forces are inlined once, not twice
         v_at = vec[1] if end else vel
         w_at = vec[3] if end and rotating else omega
-        _forces_at(data, loads, pos, quat, v_at, w_at, F, T, prof)
+        forces_at(data, loads, pos, quat, v_at, w_at, F, T, prof)
         if end:
             verlet_kick(quat, vel, omega, F, T, inv_mass, inv_inertia, iso, h, rotating, vec)
         else:
@@ -236,7 +236,7 @@ def _rk4(h, data, state, body, loads, rotating, work, prof):
     y0, total = y[0], y[1]
     rk4_begin(rotating, pos, quat, vel, omega, inertia, inv_inertia, iso, y0, x, q, v, w)
     for stage in range(4):                   # one call site, as in _verlet
-        _forces_at(data, loads, x, q, v, w, F, T, prof)
+        forces_at(data, loads, x, q, v, w, F, T, prof)
         if stage < 3:
             rk4_stage(rotating, y0, total, stage == 0, h if stage == 2 else 0.5 * h, x, q, v, w, F, T,
                       inv_mass, inv_inertia, iso)

@@ -95,6 +95,7 @@ class Model:
     source_text: str = ""
     source_path: Optional[str] = None
     extra: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
+    accuracy: Any = None         # accuracy_params.AccuracyParams for `integrator: adaptive`
 
     @property
     def n(self) -> int:

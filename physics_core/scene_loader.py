@@ -13,6 +13,7 @@ import numpy as np
 import yaml
 
 from . import materials, shapes
+from .accuracy_params import parse_accuracy
 from .contact_params import parse_contacts
 from .errors import SceneError
 from .model import (BuoyancyParams, DragParams, GravitationParams, Model, SpringSet,
@@ -20,8 +21,8 @@ from .model import (BuoyancyParams, DragParams, GravitationParams, Model, Spring
 from .planets import PLANETS, surface_gravity
 from .validate import NAME_RE, Reader
 
-INTEGRATORS = ("explicit_euler", "semi_implicit_euler", "velocity_verlet", "rk4")
-TOP_KEYS = {"name", "description", "dt", "substeps", "integrator", "gravity", "effects",
+INTEGRATORS = ("explicit_euler", "semi_implicit_euler", "velocity_verlet", "rk4", "adaptive")
+TOP_KEYS = {"name", "description", "dt", "substeps", "integrator", "accuracy", "gravity", "effects",
             "bodies", "springs", "friction"}
 EFFECT_KEYS = {"gravitation", "drag", "buoyancy", "contacts"}
 BODY_KEYS = {"name", "shape", "static", "mass", "density", "material", "restitution",
@@ -275,7 +276,9 @@ def build_model(scene) -> Model:
     r.only(TOP_KEYS)
     dt = r.number("dt", DEFAULT_DT, positive=True)
     substeps = r.number("substeps", 1, min=1, integer=True)
-    integrator = r.string("integrator", "semi_implicit_euler", choices=INTEGRATORS)
+    integrator = r.string("integrator", "adaptive" if r.has("accuracy") else "semi_implicit_euler",
+                          choices=INTEGRATORS)
+    accuracy = parse_accuracy(r, integrator, dt / substeps)
     gravity = parse_gravity(r)
     effects = parse_effects(r, gravity)
 
@@ -340,6 +343,7 @@ def build_model(scene) -> Model:
         springs=springs,
         gravity=None if gravity is None else frozen_array(gravity),
         effects=MappingProxyType(effects), dt=dt, substeps=substeps, integrator=integrator,
+        accuracy=accuracy,
         initial=initial, source_text=text, source_path=path,
         extra=MappingProxyType({"friction_pairs": MappingProxyType(extra_pairs)}),
     )

@@ -19,6 +19,7 @@ from .collision.contact_substep import N_STAGES
 from .collision.contact_substep import run as contact_substep
 from .cycle_clock import cycles
 from .finite import all_finite
+from .adaptive import ADAPTIVE, advance
 from .integration import integrate_substep
 
 # prof slots: the contact stages first (contact_substep's own indices), then these
@@ -29,14 +30,19 @@ FAILED_INTEGRATE = 100
 
 
 @njit(cache=True)
-def _integrate(code, h, idata, body, loads, masses, work, prof):
+def _integrate(code, h, idata, body, loads, masses, work, adaptive, prof):
     pos, quat, vel, omega, awake = body
     user_force, user_force_offset, user_torque, flags = loads
     inv_mass, inertia, inv_inertia = masses
     t = cycles()
-    integrate_substep(code, h, idata, pos, quat, vel, omega, inv_mass, inertia, inv_inertia,
-                      user_force, user_force_offset, user_torque, flags[0] != 0, flags[1] != 0,
-                      flags[2] != 0, work, prof[FORCES:])
+    if code == ADAPTIVE:          # error-controlled internal steps over this substep (adaptive.py)
+        advance(h, idata, (pos, quat, vel, omega), (inv_mass, inertia, inv_inertia, idata[1]),
+                (user_force, user_force_offset, user_torque, flags[0] != 0, flags[1] != 0),
+                flags[2] != 0, adaptive, work, prof[FORCES:])
+    else:
+        integrate_substep(code, h, idata, pos, quat, vel, omega, inv_mass, inertia, inv_inertia,
+                          user_force, user_force_offset, user_torque, flags[0] != 0, flags[1] != 0,
+                          flags[2] != 0, work, prof[FORCES:])
     prof[INTEGRATE] += cycles() - t
 
 
@@ -49,7 +55,7 @@ def _finite(body, prof):
 
 
 @njit(cache=True)
-def _one_step(substeps, dt, code, idata, body, loads, masses, work, contacts, prof):
+def _one_step(substeps, dt, code, idata, body, loads, masses, work, contacts, adaptive, prof):
     """One step; -1 or the failed stage."""
     pos, quat = body[0], body[1]
     cm, fp, ip, sleep, warm, events, cap = contacts
@@ -57,7 +63,7 @@ def _one_step(substeps, dt, code, idata, body, loads, masses, work, contacts, pr
     for sub in range(substeps):
         start = (pos.copy(), quat.copy(), body[2].copy(), body[3].copy())
         borrowed_start = borrow(start)
-        _integrate(code, h, idata, body, loads, masses, work, prof)
+        _integrate(code, h, idata, body, loads, masses, work, adaptive, prof)
         if not _finite(body, prof):
             return FAILED_INTEGRATE
         if len(cm.kind):
@@ -72,18 +78,21 @@ def _one_step(substeps, dt, code, idata, body, loads, masses, work, contacts, pr
 
 @njit(cache=True)
 def run_steps(n, substeps, dt, code, idata, body, loads, masses, work, contacts, warm_keys,
-              warm_values, event_ints, event_floats, event_counts, prof):
+              warm_values, event_ints, event_floats, event_counts, adaptive, prof):
     """Up to n steps; (steps done, failed stage or -1). `contacts` = (contact
     model, float and int parameters, sleep state, row-count guess); the warm
     cache and the event log's typed lists come as arguments of their own
     (numba types a tuple holding typed lists anew on every call, which costs
-    tens of microseconds; alone, a list costs well under one)."""
+    tens of microseconds; alone, a list costs well under one). `adaptive` is
+    adaptive.adaptive_data's tuple (unused_adaptive() for a fixed integrator)."""
     cm, fp, ip, sleep, cap = borrow(contacts)
     packed = (cm, fp, ip, sleep, (warm_keys, warm_values),
               (event_ints, event_floats, event_counts), cap)
-    idata, body, loads, masses, work, prof = borrow((idata, body, loads, masses, work, prof))
+    idata, body, loads, masses, work, adaptive, prof = borrow((idata, body, loads, masses, work,
+                                                               adaptive, prof))
     for k in range(n):
-        failed = _one_step(substeps, dt, code, idata, body, loads, masses, work, packed, prof)
+        failed = _one_step(substeps, dt, code, idata, body, loads, masses, work, packed, adaptive,
+                           prof)
         if failed >= 0:
             return k, failed
     return n, -1

@@ -25,6 +25,8 @@ from time import perf_counter
 
 import numpy as np
 
+from .adaptive import (ADAPTIVE, adaptive_data, clear_call, new_stats, read_stats, restart,
+                       unused_adaptive)
 from .body_set import parse_new_body, with_body, without_body
 from .body_view import BodyView
 from .collision.contact_substep import STAGE_NAMES
@@ -50,6 +52,7 @@ class World(CommandsMixin, ReadingMixin):
         self._profile = defaultdict(float)
         self._cycles = np.zeros(FORCES + N_EFFECTS, np.int64)   # step_loop's prof slots
         self._last = None             # (cycles before the last call, its steps)
+        self._adaptive_stats = new_stats()   # adaptive.py's counters, kept across _build
         self.last_step_seconds = 0.0
         self._build(model)
 
@@ -62,7 +65,14 @@ class World(CommandsMixin, ReadingMixin):
         self.rotation_rows = RowSplit(self.isotropic)
         self._idata = integration_data(model, self.isotropic)
         self._work = integration_work(model.n)
-        self._code = INTEGRATOR_CODES[model.integrator]
+        if model.accuracy is not None:
+            # error control keeps a stiff spring stable by itself: no spring substeps
+            self.substeps = model.substeps
+            self._code = ADAPTIVE
+            self._adaptive = adaptive_data(model.accuracy, model.n, self._adaptive_stats)
+        else:
+            self._code = INTEGRATOR_CODES[model.integrator]
+            self._adaptive = _NO_ADAPTIVE
         self._effects = [name for name, on in zip(EFFECT_NAMES, self._idata[0]) if on]
         # Effects whose forces can turn a body; with none of these, no held
         # torque and no spin, the rotational update is skipped (integration.py)
@@ -112,11 +122,12 @@ class World(CommandsMixin, ReadingMixin):
         flags[0], flags[1] = s.has_user_force, s.has_user_torque
         contacts, (warm_keys, warm_values), (ints, floats, counts) = (
             self.contact_system.args() if self.contact_system is not None else _NO_CONTACTS)
+        clear_call(self._adaptive[2])
         return run_steps(n, self.substeps, self.model.dt, self._code, self._idata,
                          (s.pos, s.quat, s.vel, s.omega, s.awake),
                          (s.user_force, s.user_force_offset, s.user_torque, flags),
                          (self._inv_mass, self.inertia, self.inv_inertia), self._work, contacts,
-                         warm_keys, warm_values, ints, floats, counts, self._cycles)
+                         warm_keys, warm_values, ints, floats, counts, self._adaptive, self._cycles)
 
     def _seconds(self, cycles, steps=1):
         """{stage: seconds} from step_loop's prof slots (divided by `steps`)."""
@@ -149,6 +160,27 @@ class World(CommandsMixin, ReadingMixin):
             return {}
         before, steps = self._last
         return self._seconds(self._cycles - before, steps)
+
+    @property
+    def integration_stats(self):
+        """`integrator: adaptive` only ({} otherwise), cumulative since the World
+        was made: internal_steps, rejected_steps, force_evaluations,
+        steps_at_min_step (accepted above tolerance), smallest_step_s,
+        largest_step_s, max_local_error (the largest scaled error norm of an
+        accepted step; ≤ 1 is within the tolerance, adaptive_kernels.py)."""
+        return read_stats(self._adaptive_stats) if self.model.accuracy is not None else {}
+
+    @property
+    def last_step_integration_stats(self):
+        """integration_stats of the last world.step(n) call, the counts per step
+        (its mean) and the step sizes and error over the call."""
+        if self.model.accuracy is None or self._last is None:
+            return {}
+        out = read_stats(self._adaptive_stats, call=True)
+        steps = self._last[1]
+        for name in ("internal_steps", "rejected_steps", "force_evaluations", "steps_at_min_step"):
+            out[name] = out[name] / steps
+        return out
 
     @property
     def profile(self):
@@ -202,6 +234,7 @@ class World(CommandsMixin, ReadingMixin):
         self.contacts = ContactEvents.empty()
         if self.contact_system is not None:
             self.contact_system.reset()
+        restart(self._adaptive_stats)     # the step-size controller starts again
         self.refresh_awake()
 
     # ---- bodies added and removed between steps ----------------------------
@@ -239,3 +272,4 @@ class World(CommandsMixin, ReadingMixin):
 
 
 _NO_CONTACTS = no_contacts()
+_NO_ADAPTIVE = unused_adaptive()

@@ -22,12 +22,19 @@ class DiagnosticsWindow:
         self._engine_seconds = 0.0
         self._dropped = 0
         self._profile_start = dict(getattr(self.world, "profile", {}) or {})
+        self._integration_start = dict(getattr(self.world, "integration_stats", {}) or {})
+        self._smallest_step = float("inf")
+        self._max_local_error = 0.0
 
     def stepped(self, applied, loop_seconds):
         self._steps += 1
         self._loop_seconds += loop_seconds
         self._engine_seconds += float(getattr(self.world, "last_step_seconds", 0.0))
         self.applied_total += applied
+        last = getattr(self.world, "last_step_integration_stats", None)
+        if last:
+            self._smallest_step = min(self._smallest_step, last["smallest_step_s"] or float("inf"))
+            self._max_local_error = max(self._max_local_error, last["max_local_error"])
 
     def dropped(self, reason):
         self.dropped_total[reason] = self.dropped_total.get(reason, 0) + 1
@@ -61,11 +68,31 @@ class DiagnosticsWindow:
         for stage, seconds in profile.items():
             spent = seconds - self._profile_start.get(stage, 0.0)
             values[f"stage_{stage}_ms"] = 1e3 * max(spent, 0.0) / steps
+        missed = self._integration_values(values, steps)
         if fault:
             level, message = ERROR, f"stopped: {fault}"
+        elif missed:
+            level, message = WARN, (f"{missed} internal steps at accuracy.min_step above the requested "
+                                    "accuracy in the last window")
         elif self._dropped:
             level, message = WARN, f"{self._dropped} bad commands dropped in the last {wall:.1f} s"
         else:
             level, message = OK, "paused" if paused else "running"
         self._open(now)
         return diagnostic_array(stamp_ns, STATUS_NAME, hardware_id, level, message, values)
+
+    def _integration_values(self, values, steps):
+        """`integrator: adaptive`'s statistics (World.integration_stats) into
+        values: per step over the window, the window's extremes, the totals;
+        returns the window's steps forced at min_step."""
+        total = dict(getattr(self.world, "integration_stats", {}) or {})
+        if not total:
+            return 0
+        start = self._integration_start
+        for name in ("internal_steps", "rejected_steps", "force_evaluations"):
+            values[f"integration_{name}_per_step"] = (total[name] - start.get(name, 0)) / steps
+            values[f"integration_{name}_total"] = total[name]
+        values["integration_smallest_step_s"] = self._smallest_step if self._smallest_step < float("inf") else 0.0
+        values["integration_max_local_error"] = self._max_local_error
+        values["integration_steps_at_min_step_total"] = total["steps_at_min_step"]
+        return total["steps_at_min_step"] - start.get("steps_at_min_step", 0)

@@ -38,8 +38,8 @@ from .outputs import Outputs
 from .pacing import StepPacer
 from .parameters import ParameterValueError, coerce, declare
 from .qos import COMMANDS, per_body_events
-from .recorder import SCENE_MEDIA_TYPE, SESSION_METADATA, Recorder, chunk_size_for
-from .session import engine_version, session_metadata
+from .recorder import INTEGRATION_METADATA, SCENE_MEDIA_TYPE, SESSION_METADATA, Recorder, chunk_size_for
+from .session import engine_version, integration_metadata, session_metadata
 from .stepping import Stepper
 
 NODE_NAME = "physics"
@@ -150,7 +150,12 @@ class PhysicsNode(Node):
     def close(self):
         """Finish the recording, if any, and stop serving Foxglove. Called on every exit path."""
         if self.recorder is not None:
-            self.recorder.close()
+            try:
+                stats = integration_metadata(self.world)
+                if stats and self.recorder.is_open:
+                    self.recorder.add_metadata(INTEGRATION_METADATA, stats)
+            finally:
+                self.recorder.close()
         if self.foxglove is not None:
             self.foxglove.close()
 

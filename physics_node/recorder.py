@@ -55,6 +55,7 @@ MESSAGE_ENCODING = "cdr"
 
 # Names of the records that make a recording self-contained.
 SESSION_METADATA = "physics_node"
+INTEGRATION_METADATA = "physics_integration"   # adaptive integration totals, written at close
 SCENE_MEDIA_TYPE = "application/yaml"
 # Control events (world resets) travel on this channel, relative to the
 # node's fully qualified name, as std_msgs/String.

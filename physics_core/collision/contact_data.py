@@ -28,7 +28,7 @@ ContactModel = namedtuple("ContactModel", "kind dims is_static reach material re
 # END_WEIGHT: the share of the end-of-substep velocity in the integrator's
 # displacement over a substep (INTEGRATOR_END_WEIGHT), for the time of impact
 INTEGRATOR_END_WEIGHT = {"explicit_euler": 0.0, "semi_implicit_euler": 1.0,
-                         "velocity_verlet": 0.5, "rk4": 0.5}
+                         "velocity_verlet": 0.5, "rk4": 0.5, "adaptive": 0.5}
 # integer parameters (ip)
 (ITERATIONS, POSITION_ITERATIONS, CCD_ITERATIONS, CCD_ON, SLEEP_ON, RULE, RESTITUTION_ITERATIONS,
  SHOCK_ON, N_IP) = range(9)
