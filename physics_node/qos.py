@@ -18,6 +18,15 @@ LATCHED = QoSProfile(
     reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.TRANSIENT_LOCAL,
 )
+# Services: a reliable request queue deep enough for a burst of calls
+# (limits.SERVICE_QUEUE_DEPTH); rclpy's default of 10 loses the 11th request
+# of a burst without answering it.
+SERVICES = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST,
+    depth=1000,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+)
 # Commands: a deep reliable queue so a burst of impulses is not lost.
 COMMANDS = QoSProfile(
     history=HistoryPolicy.KEEP_LAST,

@@ -21,7 +21,7 @@ from msg_adapters import arrays_from_pose_array, wrench_arrays
 from physics_core import CommandError, SceneError, load_scene
 
 from .commands import Command
-from .recorder import EVENTS_SUFFIX, RESET_EVENT, SCENE_MEDIA_TYPE, SESSION_METADATA
+from .recorder import EVENTS_SUFFIX, ISOLATE_EVENT, RESET_EVENT, SCENE_MEDIA_TYPE, SESSION_METADATA
 from .recording_reader import Recording
 from .stepping import Stepper
 
@@ -142,9 +142,21 @@ def _resimulate(recording):
                 result.divergence = _first_difference(world, m, pos, quat)
                 break
         elif m.topic == events_topic:
-            if deserialize_message(m.data, String).data == RESET_EVENT:
+            event = deserialize_message(m.data, String).data
+            if event == RESET_EVENT:
                 stepper.reset()
                 result.resets += 1
+            elif event.startswith(ISOLATE_EVENT + " "):
+                # Bodies the node froze when the step from m.sequence went
+                # non-finite: the re-run must have frozen the same ones.
+                advance_to(m.sequence + 1, "isolation event")
+                names = event[len(ISOLATE_EVENT) + 1 :].split(",")
+                missing = [n for n in names if n not in stepper.isolated]
+                if missing:
+                    raise ResimulationError(
+                        f"the recording froze {', '.join(missing)} at step {m.sequence}; the re-run did not"
+                    )
+                result.notes.append(f"froze {', '.join(names)} at step {m.sequence}, as recorded")
         else:
             match = command_topic.match(m.topic)
             if not match:
