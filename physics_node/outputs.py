@@ -127,6 +127,8 @@ class Outputs:
 
     def _recording_failed(self, exc):
         recorder, self.recorder = self.recorder, None
+        if recorder is None:
+            return
         cause = exc.__cause__ or exc
         self.recording_error = f"recording {recorder.path} stopped: {excerpt(cause, 300)}"
         try:
