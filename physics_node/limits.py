@@ -10,9 +10,11 @@ Command loads themselves are bounded in physics_core/command_limits.py.
 # is dropped as `queue_full`. Dropping the newest keeps what was queued in
 # arrival order, so each peer's applied commands are a prefix of what it sent
 # (a reliable stream's promise), and the check costs O(1) per command.
-# Applying 10,000 queued commands at one boundary takes about 0.1 s.
+# Applying a command costs 50-130 us (10,000 impulses at one boundary took
+# 1.3 s on this 2-core machine under load), so the total bound keeps the
+# longest boundary, e.g. the first step after a paused flood, near 0.5 s.
 MAX_QUEUED_PER_BODY = 1_000
-MAX_QUEUED_TOTAL = 10_000
+MAX_QUEUED_TOTAL = 5_000
 
 # Subscriptions that only count commands sent to bodies the scene lacks.
 # At most this many topics are followed; more are not subscribed to (and so

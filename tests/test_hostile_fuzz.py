@@ -14,6 +14,7 @@ import types
 import numpy as np
 import pytest
 import yaml
+from diagnostic_msgs.msg import DiagnosticStatus
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -199,6 +200,16 @@ def test_a_long_bad_value_is_quoted_short(tmp_path):
     assert len(str(info.value)) < 400
 
 
+def test_unreadable_paths_are_scene_errors_naming_them(tmp_path):
+    binary = tmp_path / "binary.yaml"
+    binary.write_bytes(bytes(range(256)))
+    for path, says in ((tmp_path, "a folder"), (tmp_path / "missing.yaml", "No such file"),
+                       (binary, "UTF-8"), ("/dev/zero", "at most")):
+        with pytest.raises(SceneError, match=says) as info:
+            load_scene(path)
+        assert str(path) in str(info.value) and "\n" not in str(info.value)
+
+
 def test_body_count_and_file_size_limits(tmp_path):
     body = "  - {{name: b{i}, shape: {{type: sphere, radius: 0.1}}, mass: 1, position: [{i}, 0, 0]}}\n"
     path = tmp_path / "twelve.yaml"
@@ -301,7 +312,7 @@ def test_a_recording_error_stops_the_recording_and_reports_error_level(world, tm
     assert "No space left on device" in outputs.recording_error and len(errors) == 1
     window = DiagnosticsWindow(world, ("queue_full",))
     msg = window.report(0, "physics", False, 1.0, recorder.path, recording_error=outputs.recording_error)
-    assert msg.status[0].level == 2  # ERROR
+    assert msg.status[0].level == DiagnosticStatus.ERROR
 
 
 def test_excerpt_caps_text_and_says_how_long_it_was():
