@@ -17,6 +17,11 @@ def _finite(v) -> bool:
         return False
 
 
+def _floats(values) -> np.ndarray:
+    """A float array of `values`, an integer beyond float64 becoming inf."""
+    return np.array([x if _finite(x) else math.inf for x in values], dtype=float)
+
+
 class Reader:
     """Reads one mapping of the scene, remembering the file and key path."""
 
@@ -97,7 +102,7 @@ class Reader:
         if (not isinstance(v, (list, tuple)) or len(v) != size
                 or any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in v)):
             self.fail(key, f"a list of {size} numbers", v)
-        arr = np.array([x if _finite(x) else math.inf for x in v], dtype=float)
+        arr = _floats(v)
         if not np.all(np.isfinite(arr)):
             self.fail(key, f"a list of {size} finite numbers", v)
         return arr

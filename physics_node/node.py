@@ -91,7 +91,8 @@ class PhysicsNode(Node):
                     library=f"physics_node {engine_version()}",
                 ).open()
             except OSError as exc:
-                raise ParameterValueError(f"record: cannot write {self.settings.record!r}: {exc.strerror or exc}") from None
+                why = exc.strerror or exc
+                raise ParameterValueError(f"record: cannot write {self.settings.record!r}: {why}") from None
         try:
             self._connect()
         except BaseException:

@@ -42,7 +42,8 @@ SCENE = {
     "bodies": [
         {"name": "ground", "shape": {"type": "plane"}},
         {"name": "ball", "shape": {"type": "sphere", "radius": 0.1}, "mass": 1.0, "position": [0, 0, 0.1]},
-        {"name": "box", "shape": {"type": "box", "half_extents": [0.2, 0.2, 0.2]}, "mass": 4.0, "position": [1, 0, 0.2]},
+        {"name": "box", "shape": {"type": "box", "half_extents": [0.2, 0.2, 0.2]}, "mass": 4.0,
+         "position": [1, 0, 0.2]},
         {"name": "speck", "shape": {"type": "sphere", "radius": 0.01}, "mass": 1e-12, "position": [50, 0, 5]},
     ],
 }
@@ -55,7 +56,12 @@ any_float = st.one_of(
 vector = st.tuples(any_float, any_float, any_float).map(np.array)
 frames = st.one_of(st.sampled_from(["", "world", "ball", "box", "speck", "ground", "nowhere"]), st.text(max_size=300))
 commands = st.builds(
-    Command, st.sampled_from([WRENCH, IMPULSE]), st.sampled_from(["ball", "box", "speck", "ground"]), frames, vector, vector
+    Command,
+    st.sampled_from([WRENCH, IMPULSE]),
+    st.sampled_from(["ball", "box", "speck", "ground"]),
+    frames,
+    vector,
+    vector,
 )
 
 

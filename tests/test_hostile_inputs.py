@@ -262,9 +262,8 @@ def test_out_of_range_parameters_are_refused_with_a_reason(hostile):
         request = SetParameters.Request(parameters=[Parameter("real_time_factor", value=value).to_parameter_msg()])
         (result,) = driver.call(SetParameters, "/physics/set_parameters", request=request).results
         assert not result.successful and result.reason, value
-    described = driver.call(
-        DescribeParameters, "/physics/describe_parameters", request=DescribeParameters.Request(names=["real_time_factor"])
-    ).descriptors[0]
+    request = DescribeParameters.Request(names=["real_time_factor"])
+    described = driver.call(DescribeParameters, "/physics/describe_parameters", request=request).descriptors[0]
     assert described.floating_point_range[0].to_value == 1000.0
     assert_stepping(node, driver, clocks)
 

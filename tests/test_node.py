@@ -6,7 +6,6 @@ reset world, so the tests do not depend on one another.
 
 import math
 import signal
-import time
 
 import numpy as np
 import pytest
