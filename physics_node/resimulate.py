@@ -6,6 +6,7 @@ command is submitted at the step index it was applied at (the message's
 PoseArray is then compared with the recomputed state bit for bit.
 """
 
+import json
 import os
 import re
 import tempfile
@@ -19,6 +20,7 @@ from std_msgs.msg import String
 
 from msg_adapters import arrays_from_pose_array, wrench_arrays
 from physics_core import CommandError, SceneError, load_scene
+from physics_core.scene_limits import MAX_BODIES
 
 from .commands import Command
 from .recorder import EVENTS_SUFFIX, ISOLATE_EVENT, RESET_EVENT, SCENE_MEDIA_TYPE, SESSION_METADATA
@@ -82,7 +84,7 @@ def _same_bits(a, b):
     return a.shape == b.shape and np.array_equal(a.view(np.uint64), b.view(np.uint64))
 
 
-def _load_world(recording):
+def _load_world(recording, max_bodies=MAX_BODIES):
     scene = recording.attachment(media_type=SCENE_MEDIA_TYPE)
     if scene is None:
         raise ResimulationError("the recording has no scene attachment")
@@ -94,7 +96,7 @@ def _load_world(recording):
             f.write(scene.data)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            return load_scene(path)
+            return load_scene(path, max_bodies=max_bodies)
 
 
 def resimulate(path):
@@ -110,7 +112,9 @@ def _resimulate(recording):
     if session is None or "node" not in session:
         raise ResimulationError(f"no {SESSION_METADATA!r} metadata: not a physics_node recording")
     node = session["node"]
-    world = _load_world(recording)
+    # The body limit the node ran with (older recordings: the default).
+    max_bodies = int(json.loads(session.get("param.max_bodies", str(MAX_BODIES))))
+    world = _load_world(recording, max_bodies)
     stepper = Stepper(world, command_timeout=0.0, error_types=(CommandError, ValueError))
     poses_topic = f"{node}/poses"
     events_topic = node + EVENTS_SUFFIX
