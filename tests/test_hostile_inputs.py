@@ -30,7 +30,7 @@ from std_srvs.srv import Empty, Trigger
 from msg_adapters import diagnostic_values, time_ns, wrench_stamped
 from physics_node.limits import MAX_QUEUED_PER_BODY, MAX_UNKNOWN_BODY_TOPICS
 
-DT = 0.01
+DT = 0.02  # few steps, so the session re-simulates quickly
 RTF = 1.0
 # A ball and a box on the ground, and a speck of 1e-12 kg far away: a force
 # within the bounds (1e9 N) gives it 1e21 m/s² and a speed beyond the
@@ -322,7 +322,7 @@ def test_replay_at_rate_0_delivers_every_pose_to_a_reliable_subscriber(tmp_path)
     scene = tmp_path / "hostile.yaml"
     scene.write_text(SCENE)
     record = tmp_path / "short.mcap"
-    made = run_cli("physics_node.main", ["--scene", scene, "--rtf", "0", "--duration", "3", "--record", record])
+    made = run_cli("physics_node.main", ["--scene", scene, "--rtf", "0", "--duration", "2", "--record", record])
     assert made.returncode == 0, made.stderr
     recorded = sum(1 for m in Recording(record).messages() if m.topic == "/physics/poses")
     poses = []
@@ -336,7 +336,7 @@ def test_replay_at_rate_0_delivers_every_pose_to_a_reliable_subscriber(tmp_path)
             driver.spin_until(lambda: len(poses) >= recorded, 5.0, f"all {recorded} poses ({len(poses)} so far)")
         finally:
             replay.stop()
-    assert len(poses) == recorded == 301
+    assert len(poses) == recorded == 101  # the start and 2 s / 0.02 s steps
 
 
 # -- the command line: one line on stderr and exit status 2 -------------------
@@ -345,21 +345,16 @@ def test_replay_at_rate_0_delivers_every_pose_to_a_reliable_subscriber(tmp_path)
 def _cli_rows(tmp_path):
     binary = tmp_path / "binary.yaml"
     binary.write_bytes(bytes(range(256)) * 4)
-    bomb = tmp_path / "bomb.yaml"
-    lines = ['a: &a ["lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol"]']
-    lines += [f"{chr(98 + i)}: &{chr(98 + i)} [{', '.join(['*' + chr(97 + i)] * 9)}]" for i in range(8)]
-    bomb.write_text("\n".join(lines) + "\ndt: *i\n")
     many = tmp_path / "many.yaml"
     body = "  - {{name: b{i}, shape: {{type: sphere, radius: 0.1}}, mass: 1, position: [{i}, 0, 0]}}\n"
     many.write_text("bodies:\n" + "".join(body.format(i=i) for i in range(12)))
     # The rows below each start a process (about 5 s on a busy machine); the
-    # folder, missing-file and body-count errors of the loader itself are
-    # checked in process by test_hostile_fuzz.py.
+    # folder, missing-file and alias errors of the loader itself are checked
+    # in process by test_hostile_fuzz.py.
     return {
         "rtf inf": (["--rtf", "inf"], "real_time_factor"),
         "rtf 1e308 as a ROS parameter": (["--ros-args", "-p", "real_time_factor:=1e308"], "real_time_factor"),
         "binary scene": (["--scene", binary], "UTF-8"),
-        "alias bomb": (["--scene", bomb], "aliases"),
         "too many bodies": (["--scene", many, "--max-bodies", "10"], "at most 10 bodies"),
         "record to a folder": (["--scene", many, "--record", tmp_path], "record"),
         "record where no folder can be made": (["--scene", many, "--record", "/proc/no/such/x.mcap"], "record"),
