@@ -58,7 +58,7 @@ bodies:
     position: [50, 0, 5]
 """
 # Resident memory the node may reach after every row (it starts at about
-# 150 MB with the engine's kernels and rclpy loaded).
+# 225 MB with the engine's kernels and rclpy loaded; physics-bench hostile).
 MEMORY_BOUND_MB = 400
 CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 FLOOD_QOS = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
