@@ -2,6 +2,8 @@
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from .limits import SERVICE_QUEUE_DEPTH
+
 # Streams: reliable so recorders and tests see every step, volatile.
 STREAM = QoSProfile(
     history=HistoryPolicy.KEEP_LAST,
@@ -23,7 +25,7 @@ LATCHED = QoSProfile(
 # of a burst without answering it.
 SERVICES = QoSProfile(
     history=HistoryPolicy.KEEP_LAST,
-    depth=1000,
+    depth=SERVICE_QUEUE_DEPTH,
     reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.VOLATILE,
 )
