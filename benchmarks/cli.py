@@ -6,6 +6,8 @@
     physics-bench effects   [--quick] [--out DIR]   per-effect cost table
     physics-bench node      [--quick] [--out DIR]   ROS 2 node in real time: step, publish, recording cost
     physics-bench all       [--quick] [--out DIR]   all of the above
+    physics-bench hostile   [--quick] [--out DIR]   floods against a node: received, counted, memory, /clock
+                                                    (not part of `all`)
 
 Each writes Markdown tables (`*.md`), plots (`*.png`) and raw data (`*.json`)
 into DIR (default benchmarks/results) and refreshes DIR/README_results.md;
@@ -53,8 +55,13 @@ def _run_node(args):
     node_realtime.run(quick=args.quick, out_dir=args.out)
 
 
+def _run_hostile(args):
+    from . import hostile_flood
+    hostile_flood.run(quick=args.quick, out=args.out)
+
+
 RUNNERS = {"accuracy": _run_accuracy, "stability": _run_stability,
-           "scale": _run_scale, "effects": _run_effects, "node": _run_node}
+           "scale": _run_scale, "effects": _run_effects, "node": _run_node, "hostile": _run_hostile}
 
 
 def parser():
@@ -67,8 +74,9 @@ def parser():
              "scale": "box pyramid and sphere piles beside PyBullet and MuJoCo",
              "effects": "cost of each declared effect",
              "node": "the ROS 2 node in real time: step, publish and recording cost per step",
-             "all": "every study, then the summary"}
-    for name in STUDIES + ("all",):
+             "all": "every study, then the summary",
+             "hostile": "floods against a running node: what reaches it, what it counts, memory, /clock"}
+    for name in STUDIES + ("all", "hostile"):
         s = sub.add_parser(name, help=helps[name])
         s.add_argument("--quick", action="store_true",
                        help="CI-sized run: fewer step sizes, shorter runs, fewer bodies")

@@ -3,6 +3,20 @@
 Every error message names what was wrong and where, so a user can fix the
 scene file or the command without reading the engine's source.
 """
+import reprlib
+
+# A bad value is quoted this short: a value can be megabytes long (or, before
+# aliases were refused, an exponentially expanded YAML alias).
+_QUOTE = reprlib.Repr()
+_QUOTE.maxlevel, _QUOTE.maxlist, _QUOTE.maxtuple, _QUOTE.maxdict = 3, 6, 6, 4
+_QUOTE.maxstring, _QUOTE.maxother, _QUOTE.maxlong = 80, 80, 40
+QUOTE_CHARS = 160
+
+
+def quote(value) -> str:
+    """repr(value), cut to at most QUOTE_CHARS characters."""
+    text = _QUOTE.repr(value)
+    return text if len(text) <= QUOTE_CHARS else text[:QUOTE_CHARS - 1] + "…"
 
 
 class PhysicsError(Exception):
@@ -24,7 +38,7 @@ class SceneError(PhysicsError, ValueError):
         where = f"{source}: {path}" if path else source
         detail = f"expected {expected}"
         if got is not None:
-            detail += f", got {got!r}"
+            detail += f", got {quote(got)}"
         super().__init__(f"{where}: {detail}")
 
 

@@ -1,16 +1,18 @@
 """The finite check after every stage: a NaN or inf is caught at the end of
 the stage that made it, never carried into the next (MuJoCo checks its
-state at stage boundaries the same way)."""
-import math
-
+state at stage boundaries the same way). A component beyond STATE_LIMIT
+(command_limits.py) counts as non-finite too: it is finite for float64 but
+not for the broad phase's integer grid cells."""
 import numpy as np
 from numba import njit
+
+from .command_limits import STATE_LIMIT
 
 
 @njit(cache=True)
 def _row_finite(a, i):
     for j in range(a.shape[1]):
-        if not math.isfinite(a[i, j]):
+        if not abs(a[i, j]) <= STATE_LIMIT:   # False for NaN as well as for ±inf
             return False
     return True
 

@@ -19,6 +19,8 @@ from .errors import SceneError
 from .model import (BuoyancyParams, DragParams, GravitationParams, Model, SpringSet,
                     frozen_array)
 from .planets import PLANETS, surface_gravity
+from .scene_limits import (MAX_BODIES, check_body_count, max_file_bytes, read_scene_text,
+                           refuse_aliases)
 from .validate import NAME_RE, Reader
 
 INTEGRATORS = ("explicit_euler", "semi_implicit_euler", "velocity_verlet", "rk4", "adaptive")
@@ -62,21 +64,21 @@ def plain_data(value):
     return value
 
 
-def read_scene_source(scene):
-    """(data dict, source label, text, path) from a path or a dict."""
+def read_scene_source(scene, max_bodies=MAX_BODIES):
+    """(data dict, source label, text, path) from a path or a dict; the file's
+    bounds are scene_limits.py's."""
     if isinstance(scene, dict):
         data = plain_data(scene)
         return data, "<dict>", yaml.dump(data, Dumper=_SceneYamlDumper, sort_keys=False), None
     path = os.fspath(scene)
-    try:
-        with open(path, encoding="utf-8") as f:
-            text = f.read()
-    except OSError as e:
-        raise SceneError(path, "", "a readable scene file", str(e)) from None
+    text = read_scene_text(path, max_file_bytes(max_bodies))
+    refuse_aliases(text, path, SceneYamlLoader)
     try:
         data = yaml.load(text, Loader=SceneYamlLoader)
     except yaml.YAMLError as e:
-        raise SceneError(path, "", "valid YAML", str(e).replace("\n", " ")) from None
+        raise SceneError(path, "", "valid YAML", " ".join(str(e).split())[:300]) from None
+    except RecursionError:
+        raise SceneError(path, "", "YAML nested less deeply", "too deep to read") from None
     return data, path, text, path
 
 
@@ -268,11 +270,12 @@ def parse_springs(r: Reader, index):
         damping=frozen_array(cols["damping"]))
 
 
-def build_model(scene) -> Model:
-    data, source, text, path = read_scene_source(scene)
+def build_model(scene, max_bodies=MAX_BODIES) -> Model:
+    data, source, text, path = read_scene_source(scene, max_bodies)
     if data is None:
         data = {}
     r = Reader(source, data)
+    check_body_count(source, data.get("bodies"), max_bodies)
     r.only(TOP_KEYS)
     dt = r.number("dt", DEFAULT_DT, positive=True)
     substeps = r.number("substeps", 1, min=1, integer=True)
@@ -349,7 +352,8 @@ def build_model(scene) -> Model:
     )
 
 
-def load_scene(scene):
-    """A World from a YAML scene file path or a dict with the same keys."""
+def load_scene(scene, max_bodies=MAX_BODIES):
+    """A World from a YAML scene file path or a dict with the same keys; at most
+    `max_bodies` bodies (scene_limits.py)."""
     from .world import World
-    return World(build_model(scene))
+    return World(build_model(scene, max_bodies))

@@ -9,6 +9,19 @@ from .errors import SceneError
 NAME_RE = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
 
 
+def _finite(v) -> bool:
+    """math.isfinite that also says False for an integer beyond float64 (10**400)."""
+    try:
+        return math.isfinite(v)
+    except OverflowError:
+        return False
+
+
+def _floats(values) -> np.ndarray:
+    """A float array of `values`, an integer beyond float64 becoming inf."""
+    return np.array([x if _finite(x) else math.inf for x in values], dtype=float)
+
+
 class Reader:
     """Reads one mapping of the scene, remembering the file and key path."""
 
@@ -20,9 +33,10 @@ class Reader:
         self.data = data
 
     def at(self, key) -> str:
-        if isinstance(key, int):
+        if isinstance(key, int) and not isinstance(key, bool):
             return f"{self.path}[{key}]"
-        return f"{self.path}.{key}" if self.path else str(key)
+        key = str(key) if len(str(key)) <= 60 else str(key)[:59] + "…"   # a key can be any length
+        return f"{self.path}.{key}" if self.path else key
 
     def fail(self, key, expected, got=None):
         raise SceneError(self.source, self.at(key), expected, got)
@@ -51,7 +65,7 @@ class Reader:
         kind = "an integer" if integer else "a number"
         if isinstance(v, bool) or not isinstance(v, (int, float)) or (integer and not isinstance(v, int)):
             self.fail(key, kind, v)
-        if not math.isfinite(v):
+        if not _finite(v):
             self.fail(key, "a finite number", v)
         if positive and not v > 0:
             self.fail(key, f"{kind} > 0", v)
@@ -88,7 +102,7 @@ class Reader:
         if (not isinstance(v, (list, tuple)) or len(v) != size
                 or any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in v)):
             self.fail(key, f"a list of {size} numbers", v)
-        arr = np.array(v, dtype=float)
+        arr = _floats(v)
         if not np.all(np.isfinite(arr)):
             self.fail(key, f"a list of {size} finite numbers", v)
         return arr

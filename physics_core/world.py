@@ -30,12 +30,14 @@ from .adaptive import (ADAPTIVE, adaptive_data, clear_call, new_stats, read_stat
 from .body_set import parse_new_body, with_body, without_body
 from .body_view import BodyView
 from .collision.contact_substep import STAGE_NAMES
+from .command_limits import STATE_LIMIT
 from .contact_events import ContactEvents
 from .cycle_clock import seconds_per_cycle
 from .effects.springs import stable_substeps
 from .errors import CommandError, NonFiniteStateError
 from .finite import non_finite_bodies
 from .free_rotation import RowSplit, isotropic_rows
+from .isolation import freeze_rows, frozen_model
 from .integration import (EFFECT_NAMES, INTEGRATOR_CODES, N_EFFECTS, can_make_torque, forces,
                           integration_data, integration_profile, integration_work)
 from .state import State
@@ -194,7 +196,8 @@ class World(CommandsMixin, ReadingMixin):
         bad = non_finite_bodies(s.pos, s.quat, s.vel, s.omega)
         names = [self.model.names[i] for i in bad]
         raise NonFiniteStateError(
-            f"step {s.step_index + 1}, stage {stage!r}: non-finite state for bodies "
+            f"step {s.step_index + 1}, stage {stage!r}: non-finite or out-of-range state "
+            f"(NaN, inf or beyond {STATE_LIMIT:g}) for bodies "
             f"{names[:10]}" + (f" (+{len(names) - 10} more)" if len(names) > 10 else ""),
             stage=stage, bodies=bad)
 
@@ -236,6 +239,18 @@ class World(CommandsMixin, ReadingMixin):
             self.contact_system.reset()
         restart(self._adaptive_stats)     # the step-size controller starts again
         self.refresh_awake()
+
+    def isolate(self, indices):
+        """Freeze bodies `indices` where they are (static from now on, velocities
+        and loads cleared) until reset(); the other bodies keep their states and
+        contacts. Used after a NonFiniteStateError, on a state restored to
+        before the failed step (isolation.py). Returns the names frozen."""
+        idx = sorted({int(i) for i in indices if not self.model.is_static[int(i)]})
+        if not idx:
+            return []
+        freeze_rows(self.state, idx)
+        self._bodies_changed(frozen_model(self.model, idx), np.arange(self.model.n))
+        return [self.model.names[i] for i in idx]
 
     # ---- bodies added and removed between steps ----------------------------
     def add_body(self, spec) -> BodyView:

@@ -5,6 +5,8 @@ so a refused command (CommandError) leaves no trace, not even its valid half.
 import numpy as np
 
 from . import quaternion as qt
+from .command_limits import (MAX_ANGULAR_IMPULSE, MAX_FORCE, MAX_IMPULSE, MAX_POINT_DISTANCE,
+                             MAX_TORQUE, magnitude)
 from .errors import CommandError
 from .vec3 import cross
 
@@ -19,14 +21,24 @@ class CommandsMixin:
         return i
 
     @staticmethod
-    def _vec(value, what) -> np.ndarray:
+    def _vec(value, what, limit=None, unit="") -> np.ndarray:
         try:
             v = np.array(value, dtype=float).reshape(3)
-        except (TypeError, ValueError):
-            raise CommandError(f"{what}: expected 3 numbers, got {value!r}") from None
+        except (TypeError, ValueError, OverflowError):
+            raise CommandError(f"{what}: expected 3 numbers, got {str(value)[:80]!r}") from None
         if not np.all(np.isfinite(v)):
             raise CommandError(f"{what}: expected finite numbers, got {v.tolist()}")
+        if limit is not None and not magnitude(v) <= limit:
+            raise CommandError(f"{what}: magnitude {magnitude(v):.3g} {unit} is beyond the limit "
+                               f"{limit:g} {unit} (physics_core.command_limits)")
         return v
+
+    def _point(self, i, point, what):
+        p = self._vec(point, what)
+        if not magnitude(p - self.state.pos[i]) <= MAX_POINT_DISTANCE:
+            raise CommandError(f"{what}: {magnitude(p - self.state.pos[i]):.3g} m from the body, beyond "
+                               f"the limit {MAX_POINT_DISTANCE:g} m (physics_core.command_limits)")
+        return p
 
     def apply_force(self, name, force, point=None):
         """Hold a force (N, world frame) on a body until replaced; zero clears it.
@@ -34,10 +46,10 @@ class CommandsMixin:
         With a world `point`, the force acts there: the point is fixed to the
         body (stored in body axes) so τ = r × F follows the body as it turns."""
         i = self._body_index(name)
-        f = self._vec(force, f"force on {name!r}")
+        f = self._vec(force, f"force on {name!r}", MAX_FORCE, "N")
         # Validate every argument before touching the state: a refused command
         # must leave no trace (not even its valid half).
-        p = None if point is None else self._vec(point, f"point of force on {name!r}")
+        p = None if point is None else self._point(i, point, f"point of force on {name!r}")
         s = self.state
         s.user_force[i] = f
         s.has_user_force = True
@@ -51,7 +63,7 @@ class CommandsMixin:
     def apply_torque(self, name, torque):
         """Hold a torque (N·m, world frame) on a body until replaced; zero clears it."""
         i = self._body_index(name)
-        self.state.user_torque[i] = self._vec(torque, f"torque on {name!r}")
+        self.state.user_torque[i] = self._vec(torque, f"torque on {name!r}", MAX_TORQUE, "N·m")
         self.state.has_user_torque = True
         self.wake(i)
 
@@ -60,8 +72,8 @@ class CommandsMixin:
 
         At a world `point`, it also adds the angular impulse r × J."""
         i = self._body_index(name)
-        j = self._vec(impulse, f"impulse on {name!r}")
-        p = None if point is None else self._vec(point, f"point of impulse on {name!r}")
+        j = self._vec(impulse, f"impulse on {name!r}", MAX_IMPULSE, "N·s")
+        p = None if point is None else self._point(i, point, f"point of impulse on {name!r}")
         s = self.state
         s.impulse[i] += j
         if p is not None:
@@ -72,7 +84,8 @@ class CommandsMixin:
     def apply_angular_impulse(self, name, angular_impulse):
         """An angular impulse (N·m·s, world frame), applied once at the next step."""
         i = self._body_index(name)
-        self.state.angular_impulse[i] += self._vec(angular_impulse, f"angular impulse on {name!r}")
+        self.state.angular_impulse[i] += self._vec(angular_impulse, f"angular impulse on {name!r}",
+                                                   MAX_ANGULAR_IMPULSE, "N·m·s")
         self.state.has_pending_impulse = True
         self.wake(i)
 

@@ -10,6 +10,7 @@ import numpy as np
 
 from msg_adapters.frames import rotate_to_world
 from msg_adapters.wrenches import is_world_frame
+from physics_core.command_limits import MAX_ANGULAR_IMPULSE, MAX_FORCE, MAX_IMPULSE, MAX_TORQUE, magnitude
 
 WRENCH = "wrench"
 IMPULSE = "impulse"
@@ -20,7 +21,28 @@ NON_FINITE = "non_finite"
 UNKNOWN_FRAME = "unknown_frame"
 STATIC_BODY = "static_body"
 REJECTED = "rejected_by_engine"
-DROP_REASONS = (UNKNOWN_BODY, NON_FINITE, UNKNOWN_FRAME, STATIC_BODY, REJECTED)
+OUT_OF_RANGE = "out_of_range"  # beyond physics_core/command_limits.py
+QUEUE_FULL = "queue_full"  # beyond the queue bounds of limits.py
+MALFORMED = "malformed"  # bytes that do not deserialize as a WrenchStamped
+DISCARDED_ON_RESET = "reset"  # queued when the world was reset
+DROP_REASONS = (
+    UNKNOWN_BODY,
+    NON_FINITE,
+    OUT_OF_RANGE,
+    UNKNOWN_FRAME,
+    STATIC_BODY,
+    QUEUE_FULL,
+    MALFORMED,
+    DISCARDED_ON_RESET,
+    REJECTED,
+)
+
+# (force bound, torque bound, units) of each command kind: a wrench's force
+# and torque are held, an impulse's are a linear and an angular impulse.
+BOUNDS = {
+    WRENCH: (MAX_FORCE, MAX_TORQUE, ("N", "N·m")),
+    IMPULSE: (MAX_IMPULSE, MAX_ANGULAR_IMPULSE, ("N·s", "N·m·s")),
+}
 
 
 @dataclass
@@ -49,11 +71,26 @@ def check(command, model):
         return UNKNOWN_BODY
     if not (np.all(np.isfinite(command.force)) and np.all(np.isfinite(command.torque))):
         return NON_FINITE
+    if out_of_range(command):
+        return OUT_OF_RANGE
     if not (is_world_frame(command.frame) or command.frame == command.body):
         return UNKNOWN_FRAME
     if bool(model.is_static[index]):
         return STATIC_BODY
     return None
+
+
+def out_of_range(command):
+    """'' if the command's loads are within BOUNDS, else what is beyond them."""
+    force_limit, torque_limit, (force_unit, torque_unit) = BOUNDS.get(command.kind, BOUNDS[WRENCH])
+    for what, v, limit, unit in (
+        ("force" if command.kind == WRENCH else "linear impulse", command.force, force_limit, force_unit),
+        ("torque" if command.kind == WRENCH else "angular impulse", command.torque, torque_limit, torque_unit),
+    ):
+        size = magnitude(v)
+        if not size <= limit:
+            return f"{what} of magnitude {size:.3g} {unit} is beyond the limit {limit:g} {unit}"
+    return ""
 
 
 class CommandApplier:
@@ -113,6 +150,11 @@ class CommandApplier:
             f, t = self._to_world(name, force, torque)
             self.world.apply_force(name, f)
             self.world.apply_torque(name, t)
+
+    def let_go(self, name):
+        """Forget what `name` holds (it was frozen: it takes no more loads)."""
+        self._body_axes.pop(name, None)
+        self._held_since.pop(name, None)
 
     def forget(self):
         """Drop everything held (after the world is reset)."""

@@ -12,6 +12,7 @@ class DiagnosticsWindow:
         self.world = world
         self.dropped_total = {reason: 0 for reason in drop_reasons}
         self.applied_total = 0
+        self.received_total = 0  # commands that reached a command callback
         self._open(time.monotonic())
 
     def _open(self, now):
@@ -40,7 +41,19 @@ class DiagnosticsWindow:
         self.dropped_total[reason] = self.dropped_total.get(reason, 0) + 1
         self._dropped += 1
 
-    def report(self, stamp_ns, hardware_id, paused, target_rtf, recording, fault=""):
+    def report(
+        self,
+        stamp_ns,
+        hardware_id,
+        paused,
+        target_rtf,
+        recording,
+        fault="",
+        recording_error="",
+        isolated=(),
+        queued=0,
+        unknown_topics=(0, 0),
+    ):
         """DiagnosticArray for the window just ended; opens the next one."""
         now = time.monotonic()
         w = self.world
@@ -62,8 +75,15 @@ class DiagnosticsWindow:
         for reason, count in self.dropped_total.items():
             values[f"dropped_{reason}"] = count
         values["applied_commands"] = self.applied_total
+        # applied + dropped + queued = received (the unknown-body topics' drops included)
+        values["received_commands"] = self.received_total + self.dropped_total.get("unknown_body", 0)
+        values["queued_commands"] = int(queued)
+        values["unknown_body_topics"] = int(unknown_topics[0])
+        values["unknown_body_topics_ignored"] = int(unknown_topics[1])
+        values["isolated_bodies"] = ", ".join(isolated)
         values["paused"] = bool(paused)
         values["recording"] = recording
+        values["recording_error"] = recording_error
         profile = dict(getattr(w, "profile", {}) or {})
         for stage, seconds in profile.items():
             spent = seconds - self._profile_start.get(stage, 0.0)
@@ -71,6 +91,10 @@ class DiagnosticsWindow:
         missed = self._integration_values(values, steps)
         if fault:
             level, message = ERROR, f"stopped: {fault}"
+        elif recording_error:
+            level, message = ERROR, recording_error
+        elif isolated:
+            level, message = WARN, f"{len(isolated)} bodies frozen after a non-finite state: {', '.join(isolated[:10])}"
         elif missed:
             level, message = WARN, (f"{missed} internal steps at accuracy.min_step above the requested "
                                     "accuracy in the last window")

@@ -10,6 +10,7 @@ import signal
 import sys
 
 import rclpy
+from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
@@ -18,7 +19,7 @@ from physics_core import SceneError
 
 from .foxglove_server import FoxgloveError
 from .node import PhysicsNode
-from .parameters import ODOMETRY_MODES, ParameterValueError
+from .parameters import ODOMETRY_MODES, ParameterValueError, coerce
 
 
 def build_parser():
@@ -32,6 +33,12 @@ def build_parser():
     p.add_argument("--duration", type=float, metavar="S", help="sim seconds to run, then exit (0 = until stopped)")
     p.add_argument("--rtf", type=float, metavar="X", help="real-time factor (0 = as fast as possible)")
     p.add_argument("--paused", action="store_true", default=None, help="start paused")
+    p.add_argument(
+        "--max-bodies",
+        type=int,
+        metavar="N",
+        help="most bodies a scene may declare (default 10,000; see README, Limits and hostile input)",
+    )
     p.add_argument(
         "--odometry",
         choices=ODOMETRY_MODES,
@@ -101,8 +108,10 @@ def parameter_overrides(args):
         "real_time_factor": args.rtf,
         "paused": args.paused,
         "odometry": args.odometry,
+        "max_bodies": args.max_bodies,
     }
-    return [Parameter(name, value=value) for name, value in pairs.items() if value is not None]
+    # The same checks as a parameter set at run time (ParameterValueError).
+    return [Parameter(name, value=coerce(name, value)) for name, value in pairs.items() if value is not None]
 
 
 def how_to_push(node):
@@ -164,13 +173,18 @@ class StopRequest:
 def main(argv=None):
     argv = list(sys.argv if argv is None else argv)
     args = build_parser().parse_args(rclpy.utilities.remove_ros_args(args=argv)[1:])
+    try:
+        overrides = parameter_overrides(args)
+    except ParameterValueError as exc:
+        print(f"physics-node: {exc}", file=sys.stderr, flush=True)
+        return 2
     stop = StopRequest()
     stop.install()
     rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
     node = None
     status = 0
     try:
-        node = PhysicsNode(parameter_overrides=parameter_overrides(args), foxglove=foxglove_bridge(args))
+        node = PhysicsNode(parameter_overrides=overrides, foxglove=foxglove_bridge(args))
         try:
             print(how_to_push(node), flush=True)
             if node.foxglove is not None:
@@ -188,6 +202,10 @@ def main(argv=None):
         pass
     except (SceneError, ParameterValueError, FoxgloveError) as exc:
         print(f"physics-node: {exc}", file=sys.stderr, flush=True)
+        status = 2
+    except (InvalidParameterValueException, InvalidParameterTypeException) as exc:
+        # `--ros-args -p real_time_factor:=1e308`: refused by the descriptor's range
+        print(f"physics-node: {' '.join(str(exc).split())}", file=sys.stderr, flush=True)
         status = 2
     finally:
         if node is not None:

@@ -6,7 +6,6 @@ in `stepping.py`, message shapes in `msg_adapters`, the file in `recorder.py`.
 """
 
 import os
-import re
 import time
 import warnings
 
@@ -22,25 +21,31 @@ from msg_adapters import sim_time_ns, wrench_arrays
 from physics_core import CommandError, default_scene_path, load_scene
 
 from .commands import (
+    DISCARDED_ON_RESET,
     DROP_REASONS,
     IMPULSE,
+    MALFORMED,
     NON_FINITE,
+    OUT_OF_RANGE,
+    QUEUE_FULL,
     REJECTED,
     STATIC_BODY,
-    UNKNOWN_BODY,
     UNKNOWN_FRAME,
     WRENCH,
     Command,
     check,
+    out_of_range,
 )
 from .diagnostics import DiagnosticsWindow
+from .limits import MAX_QUEUED_PER_BODY, MAX_QUEUED_TOTAL, excerpt
 from .outputs import Outputs
 from .pacing import StepPacer
 from .parameters import ParameterValueError, coerce, declare
-from .qos import COMMANDS, per_body_events
+from .qos import COMMANDS, SERVICES, per_body_events
 from .recorder import INTEGRATION_METADATA, SCENE_MEDIA_TYPE, SESSION_METADATA, Recorder, chunk_size_for
 from .session import engine_version, integration_metadata, session_metadata
 from .stepping import Stepper
+from .unknown_bodies import UnknownBodyTopics
 
 NODE_NAME = "physics"
 # Wall time one timer callback may spend stepping before it lets the
@@ -66,7 +71,7 @@ class PhysicsNode(Node):
         # it does not know); those belong in the node's log.
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            self.world = load_scene(self.scene_path)
+            self.world = load_scene(self.scene_path, max_bodies=self.settings.max_bodies)
         for w in caught:
             self.get_logger().warning(str(w.message))
         self.model = self.world.model
@@ -77,15 +82,19 @@ class PhysicsNode(Node):
         self.pacer = StepPacer(self.world.dt, self.settings.real_time_factor)
         self.window = DiagnosticsWindow(self.world, DROP_REASONS)
         self._last_warning = {}
-        self._unknown_body_subs = {}
+        self.unknown_bodies = UnknownBodyTopics(self, self.model.names, self._drop)
 
         self.recorder = None
         if self.settings.record:
-            self.recorder = Recorder(
-                self.settings.record,
-                chunk_size=chunk_size_for(len(self.model.names)),
-                library=f"physics_node {engine_version()}",
-            ).open()
+            try:
+                self.recorder = Recorder(
+                    self.settings.record,
+                    chunk_size=chunk_size_for(len(self.model.names)),
+                    library=f"physics_node {engine_version()}",
+                ).open()
+            except OSError as exc:
+                why = exc.strerror or exc
+                raise ParameterValueError(f"record: cannot write {self.settings.record!r}: {why}") from None
         try:
             self._connect()
         except BaseException:
@@ -113,11 +122,11 @@ class PhysicsNode(Node):
                 )
                 self._command_topics[(name, kind)] = sub.topic_name
 
-        self.create_service(Empty, "pause_physics", self._on_pause)
-        self.create_service(Empty, "unpause_physics", self._on_unpause)
-        self.create_service(Empty, "reset_simulation", self._on_reset)
-        self.create_service(Empty, "reset_world", self._on_reset)
-        self.create_service(Trigger, "~/step", self._on_step)
+        self.create_service(Empty, "pause_physics", self._on_pause, qos_profile=SERVICES)
+        self.create_service(Empty, "unpause_physics", self._on_unpause, qos_profile=SERVICES)
+        self.create_service(Empty, "reset_simulation", self._on_reset, qos_profile=SERVICES)
+        self.create_service(Empty, "reset_world", self._on_reset, qos_profile=SERVICES)
+        self.create_service(Trigger, "~/step", self._on_step, qos_profile=SERVICES)
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
 
@@ -126,7 +135,7 @@ class PhysicsNode(Node):
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         self._tick = self.create_timer(self.pacer.tick_period(), self._on_tick, clock=steady)
         self.create_timer(1.0, self._on_diagnostics, clock=steady)
-        self.create_timer(UNKNOWN_BODY_SCAN_S, self._scan_for_unknown_bodies, clock=steady)
+        self.create_timer(UNKNOWN_BODY_SCAN_S, self.unknown_bodies.scan, clock=steady)
         self.create_timer(
             SUBSCRIBER_SCAN_S / SUBSCRIBER_SCAN_PARTS,
             lambda: self.outputs.poll_subscribers(SUBSCRIBER_SCAN_PARTS),
@@ -181,7 +190,11 @@ class PhysicsNode(Node):
             self.outputs.record_command(command, applied_ns, boundary.step)
         for command, error in boundary.rejected:
             self._drop(command.topic, REJECTED, str(error))
+        received = sum(1 for c in boundary.applied if c.raw)  # not the node's own timeout clears
+        if boundary.isolated:
+            self._isolated(boundary, applied_ns)
         if boundary.failure is not None:
+            self.window.applied_total += received
             self._halt(boundary.failure)
             return
         w = self.world
@@ -189,11 +202,20 @@ class PhysicsNode(Node):
         self.outputs.send_clock(now_ns, w.step_index)
         if publish_all or w.step_index % self.settings.publish_every == 0:
             self.outputs.send_state(w, now_ns, w.step_index)
-        self.window.stepped(len(boundary.applied), time.perf_counter() - loop_start)
+        self.window.stepped(received, time.perf_counter() - loop_start)
         duration = self.settings.duration
         if duration > 0 and w.time >= duration - 0.5 * w.dt:
             self.finished = True
             self.get_logger().info(f"reached duration {duration:g} s of sim time after {w.step_index} steps")
+
+    def _isolated(self, boundary, time_ns):
+        """Bodies frozen after a non-finite state: recorded as an event, logged."""
+        self.outputs.record_isolation(boundary.isolated, time_ns, boundary.step)
+        for fault in boundary.faults:
+            self.get_logger().error(
+                f"{excerpt(fault, 400)}: froze {', '.join(boundary.isolated)} where they were before the step; "
+                "the rest of the world keeps simulating (reset_simulation brings them back)"
+            )
 
     def _halt(self, error):
         """The state went non-finite: stop stepping until a reset."""
@@ -204,15 +226,17 @@ class PhysicsNode(Node):
     # -- commands -------------------------------------------------------------
     def _command_callback(self, body, kind):
         def on_message(raw):
-            msg = deserialize_message(raw, WrenchStamped)
-            frame, force, torque = wrench_arrays(msg)
             topic = self._command_topics[(body, kind)]
-            command = Command(kind, body, frame, force, torque, topic=topic, raw=raw)
-            reason = check(command, self.model)
-            if reason is not None:
-                self._drop(topic, reason, _explain(reason, command))
+            self.window.received_total += 1
+            try:
+                frame, force, torque = wrench_arrays(deserialize_message(raw, WrenchStamped))
+            except Exception as exc:  # bytes from a peer: never let them reach the executor
+                self._drop(topic, MALFORMED, f"not a WrenchStamped ({excerpt(exc, 100)})")
                 return
-            self.stepper.submit(command)
+            command = Command(kind, body, frame, force, torque, topic=topic, raw=raw)
+            reason = check(command, self.world.model) or self.stepper.submit(command)
+            if reason is not None:
+                self._drop(topic, reason, _explain(reason, command, self.stepper.isolated))
 
         return on_message
 
@@ -224,28 +248,8 @@ class PhysicsNode(Node):
             self._last_warning[reason] = (last, pending + 1)
             return
         more = f" (+{pending} more since the last warning)" if pending else ""
-        self.get_logger().warning(f"dropped a command on {topic}: {detail}{more}")
+        self.get_logger().warning(f"dropped a command on {excerpt(topic)}: {excerpt(detail)}{more}")
         self._last_warning[reason] = (now, 0)
-
-    def _scan_for_unknown_bodies(self):
-        """Count commands sent to bodies the scene does not have: the graph is
-        scanned for command topics under this node and each unknown one gets a
-        subscription that only drops and counts."""
-        prefix = re.escape(self.get_fully_qualified_name())
-        pattern = re.compile(rf"^{prefix}/([^/]+)/({WRENCH}|{IMPULSE})$")
-        for topic, _types in self.get_topic_names_and_types():
-            match = pattern.match(topic)
-            if not match or match.group(1) in self.model.index or topic in self._unknown_body_subs:
-                continue
-            body = match.group(1)
-            detail = f"no body named {body!r}; bodies are {', '.join(self.model.names)}"
-
-            def on_unknown(_raw, topic=topic, detail=detail):
-                self._drop(topic, UNKNOWN_BODY, detail)
-
-            self._unknown_body_subs[topic] = self.create_subscription(
-                WrenchStamped, topic, on_unknown, COMMANDS, raw=True, event_callbacks=per_body_events()[1]
-            )
 
     # -- services -------------------------------------------------------------
     def _on_pause(self, _request, response):
@@ -257,7 +261,9 @@ class PhysicsNode(Node):
         return response
 
     def _on_reset(self, _request, response):
-        discarded = self.stepper.reset()
+        discarded = len(self.stepper.reset())
+        for _ in range(discarded):
+            self.window.dropped(DISCARDED_ON_RESET)
         self.outputs.refresh_subscribers()
         t0 = sim_time_ns(self.world.time)
         step = self.world.step_index
@@ -326,15 +332,31 @@ class PhysicsNode(Node):
             fault=self.faulted,
             target_rtf=self.settings.real_time_factor,
             recording=self.recorder.path if self.recorder else "",
+            recording_error=self.outputs.recording_error,
+            isolated=self.stepper.isolated,
+            queued=self.stepper.pending,
+            unknown_topics=(len(self.unknown_bodies.subscriptions), len(self.unknown_bodies.ignored)),
         )
         self.outputs.send_diagnostics(msg, sim_time_ns(self.world.time), self.world.step_index)
 
 
-def _explain(reason, command):
+def _explain(reason, command, isolated=()):
     if reason == NON_FINITE:
         return "force or torque has a NaN or infinite component"
+    if reason == OUT_OF_RANGE:
+        return out_of_range(command) + " (physics_core/command_limits.py)"
     if reason == UNKNOWN_FRAME:
-        return f"frame_id {command.frame!r} is neither 'world' (or empty) nor the body's own name {command.body!r}"
+        return (
+            f"frame_id {excerpt(command.frame, 60)!r} is neither 'world' (or empty) "
+            f"nor the body's own name {command.body!r}"
+        )
     if reason == STATIC_BODY:
+        if command.body in isolated:
+            return f"{command.body!r} was frozen after its state went non-finite; reset_simulation brings it back"
         return f"{command.body!r} is static and takes no forces"
+    if reason == QUEUE_FULL:
+        return (
+            f"the command queue is full ({MAX_QUEUED_PER_BODY} per body, {MAX_QUEUED_TOTAL} in all, "
+            "until the next step applies them); the newest command is dropped"
+        )
     return reason

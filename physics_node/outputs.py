@@ -27,13 +27,15 @@ from msg_adapters.cdr import (
 )
 
 from .qos import COMMANDS, LATCHED, STREAM, per_body_events
-from .recorder import EVENTS_SUFFIX, RESET_EVENT
+from .limits import excerpt
+from .recorder import EVENTS_SUFFIX, ISOLATE_EVENT, RESET_EVENT, RecorderError
 
 
 class Outputs:
     def __init__(self, node, model, recorder=None, odometry="subscribed"):
         self.model = model
         self.recorder = recorder
+        self.recording_error = ""  # why the recording stopped early, if it did
         self._node = node
         pub = node.create_publisher
         self.clock = pub(Clock, "/clock", LATCHED)
@@ -113,7 +115,30 @@ class Outputs:
         publisher.publish(data)
         if self.recorder is not None:
             topic = self._topic[publisher]
-            self.recorder.write(topic, msg_class, data, time_ns, step, self._qos[topic])
+            self._record(self.recorder.write, topic, msg_class, data, time_ns, step, self._qos[topic])
+
+    def _record(self, write, *args):
+        """`write(*args)` on the recorder; a write error (disk full, file
+        removed, no permission) stops the recording, never the simulation."""
+        try:
+            write(*args)
+        except (RecorderError, OSError) as exc:
+            self._recording_failed(exc)
+
+    def _recording_failed(self, exc):
+        recorder, self.recorder = self.recorder, None
+        if recorder is None:
+            return
+        cause = exc.__cause__ or exc
+        self.recording_error = f"recording {recorder.path} stopped: {excerpt(cause, 300)}"
+        try:
+            recorder.close()  # the file ends with the last chunk written
+        except (RecorderError, OSError):
+            pass
+        self._node.get_logger().error(
+            f"{self.recording_error}; the simulation goes on unrecorded "
+            f"(`physics-replay {recorder.path} --recover OUT.mcap` reads what was written)"
+        )
 
     # -- per step ----------------------------------------------------------
     def send_clock(self, time_ns, step):
@@ -130,11 +155,14 @@ class Outputs:
         for publisher, data in zip(publishers, datas):
             publisher.publish(data)
         if self.recorder is not None:
-            channels = self._channels
-            ids = [channels.get(p) for p in publishers]
-            if None in ids:
-                ids = [self._channel(p) for p in publishers]
-            self.recorder.write_many(ids, datas, time_ns, step)
+            self._record(self._record_state, publishers, datas, time_ns, step)
+
+    def _record_state(self, publishers, datas, time_ns, step):
+        channels = self._channels
+        ids = [channels.get(p) for p in publishers]
+        if None in ids:
+            ids = [self._channel(p) for p in publishers]
+        self.recorder.write_many(ids, datas, time_ns, step)
 
     def _channel(self, publisher):
         cid = self._channels.get(publisher)
@@ -165,13 +193,20 @@ class Outputs:
             msg.header.frame_id = command.frame
             data = serialize_message(msg)
         topic = command.topic or f"{self._node.get_fully_qualified_name()}/{command.body}/wrench"
-        self.recorder.write(topic, WrenchStamped, data, time_ns, step, COMMANDS)
+        self._record(self.recorder.write, topic, WrenchStamped, data, time_ns, step, COMMANDS)
 
     def record_reset(self, time_ns, step):
+        self._record_event(RESET_EVENT, time_ns, step)
+
+    def record_isolation(self, names, time_ns, step):
+        """Bodies frozen at step `step` after a non-finite state: `isolate a,b`."""
+        self._record_event(f"{ISOLATE_EVENT} {','.join(names)}", time_ns, step)
+
+    def _record_event(self, text, time_ns, step):
         if self.recorder is None:
             return
-        data = serialize_message(String(data=RESET_EVENT))
-        self.recorder.write(self.events_topic, String, data, time_ns, step, STREAM)
+        data = serialize_message(String(data=text))
+        self._record(self.recorder.write, self.events_topic, String, data, time_ns, step, STREAM)
 
 
 def _state_builder(model, logger):

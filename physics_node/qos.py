@@ -2,6 +2,8 @@
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from .limits import SERVICE_QUEUE_DEPTH
+
 # Streams: reliable so recorders and tests see every step, volatile.
 STREAM = QoSProfile(
     history=HistoryPolicy.KEEP_LAST,
@@ -18,9 +20,26 @@ LATCHED = QoSProfile(
     reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.TRANSIENT_LOCAL,
 )
-# Commands: a deep reliable queue so a burst of impulses is not lost.
-COMMANDS = QoSProfile(
+# Services: a reliable request queue deep enough for a burst of calls
+# (limits.SERVICE_QUEUE_DEPTH); rclpy's default of 10 loses the 11th request
+# of a burst without answering it.
+SERVICES = QoSProfile(
     history=HistoryPolicy.KEEP_LAST,
+    depth=SERVICE_QUEUE_DEPTH,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+)
+# Commands: reliable, KEEP_ALL. A KEEP_LAST reader overwrites what the node
+# has not taken yet when a peer publishes faster than it is read (20,000
+# wrenches at 30,000/s: 16 % applied, nothing counted); a KEEP_ALL reader
+# instead withholds its acknowledgement, so a reliable writer waits (its
+# `publish` blocks up to the middleware's blocking time) and nothing that
+# was acknowledged is lost. The reader's history is bounded by the
+# middleware's resource limits (Fast DDS: 400 samples per topic by default),
+# the node's queue by limits.py. A best-effort writer is matched too; what it
+# sends past a full reader is lost in transit, before the node can count it.
+COMMANDS = QoSProfile(
+    history=HistoryPolicy.KEEP_ALL,
     depth=100,
     reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.VOLATILE,

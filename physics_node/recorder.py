@@ -61,6 +61,8 @@ SCENE_MEDIA_TYPE = "application/yaml"
 # node's fully qualified name, as std_msgs/String.
 EVENTS_SUFFIX = "/events"
 RESET_EVENT = "reset"
+# "isolate a,b": bodies frozen at that step after their state went non-finite.
+ISOLATE_EVENT = "isolate"
 
 # Chunks are finished on a writer thread; False finishes them inline on the
 # calling thread (same bytes; for comparison).

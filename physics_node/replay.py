@@ -27,7 +27,12 @@ def build_parser():
         "or re-run it and check every pose bit for bit.",
     )
     p.add_argument("file", help="recording (.mcap)")
-    p.add_argument("--rate", type=float, default=1.0, help="playback speed; 2 = twice real time, 0 = no waiting")
+    p.add_argument(
+        "--rate",
+        type=float,
+        default=1.0,
+        help="playback speed; 2 = twice real time, 0 = as fast as reliable subscribers acknowledge",
+    )
     p.add_argument(
         "--resimulate",
         action="store_true",
@@ -61,8 +66,8 @@ def main(argv=None):
     except (OSError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr, flush=True)
         return ERROR
-    if args.rate < 0:
-        print("error: --rate must be >= 0", file=sys.stderr)
+    if not 0 <= args.rate < float("inf"):
+        print(f"error: --rate must be a finite number >= 0, got {args.rate!r}", file=sys.stderr)
         return ERROR
     rclpy.init(args=argv)
     node = rclpy.create_node(REPLAY_NODE)
@@ -112,6 +117,7 @@ def republish(node, recording, rate, wait=2.0):
         if topic != "/clock"
     }
     _wait_for_listeners([clock, *publishers.values()], wait)
+    window = _InFlight() if rate == 0 else None
     wall_start = sim_start = last = None
     count = 0
     for m in recording.messages():
@@ -127,12 +133,38 @@ def republish(node, recording, rate, wait=2.0):
             if delay > 0:
                 time.sleep(delay)
         if t != last:
-            clock.publish(Clock(clock=time_msg(t)))
+            _publish(clock, Clock(clock=time_msg(t)), window)
             last = t
-        publishers[m.topic].publish(m.data)
+        _publish(publishers[m.topic], m.data, window)
         count += 1
     _drain([clock, *publishers.values()])
     return count
+
+
+class _InFlight:
+    """Flow control for `--rate 0`: before a publisher's history (its QoS
+    depth) could overwrite a message no reliable subscriber has acknowledged
+    yet, wait until they have (up to `timeout` s, so a stalled subscriber
+    slows the replay down but cannot hang it). Without it, publishing as
+    fast as possible through a depth-10 history delivered 22-33 % of the
+    poses."""
+
+    def __init__(self, timeout=1.0):
+        self.timeout = Duration(nanoseconds=int(timeout * 1e9))
+        self._sent = {}
+
+    def before(self, publisher):
+        sent = self._sent.get(publisher, 0)
+        if sent >= max(int(publisher.qos_profile.depth), 1):
+            publisher.wait_for_all_acked(self.timeout)
+            sent = 0
+        self._sent[publisher] = sent + 1
+
+
+def _publish(publisher, msg, window):
+    if window is not None:
+        window.before(publisher)
+    publisher.publish(msg)
 
 
 def _drain(publishers, timeout=2.0):

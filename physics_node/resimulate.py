@@ -6,6 +6,7 @@ command is submitted at the step index it was applied at (the message's
 PoseArray is then compared with the recomputed state bit for bit.
 """
 
+import json
 import os
 import re
 import tempfile
@@ -19,9 +20,10 @@ from std_msgs.msg import String
 
 from msg_adapters import arrays_from_pose_array, wrench_arrays
 from physics_core import CommandError, SceneError, load_scene
+from physics_core.scene_limits import MAX_BODIES
 
 from .commands import Command
-from .recorder import EVENTS_SUFFIX, RESET_EVENT, SCENE_MEDIA_TYPE, SESSION_METADATA
+from .recorder import EVENTS_SUFFIX, ISOLATE_EVENT, RESET_EVENT, SCENE_MEDIA_TYPE, SESSION_METADATA
 from .recording_reader import Recording
 from .stepping import Stepper
 
@@ -82,7 +84,7 @@ def _same_bits(a, b):
     return a.shape == b.shape and np.array_equal(a.view(np.uint64), b.view(np.uint64))
 
 
-def _load_world(recording):
+def _load_world(recording, max_bodies=MAX_BODIES):
     scene = recording.attachment(media_type=SCENE_MEDIA_TYPE)
     if scene is None:
         raise ResimulationError("the recording has no scene attachment")
@@ -94,7 +96,7 @@ def _load_world(recording):
             f.write(scene.data)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            return load_scene(path)
+            return load_scene(path, max_bodies=max_bodies)
 
 
 def resimulate(path):
@@ -110,7 +112,9 @@ def _resimulate(recording):
     if session is None or "node" not in session:
         raise ResimulationError(f"no {SESSION_METADATA!r} metadata: not a physics_node recording")
     node = session["node"]
-    world = _load_world(recording)
+    # The body limit the node ran with (older recordings: the default).
+    max_bodies = int(json.loads(session.get("param.max_bodies", str(MAX_BODIES))))
+    world = _load_world(recording, max_bodies)
     stepper = Stepper(world, command_timeout=0.0, error_types=(CommandError, ValueError))
     poses_topic = f"{node}/poses"
     events_topic = node + EVENTS_SUFFIX
@@ -142,9 +146,21 @@ def _resimulate(recording):
                 result.divergence = _first_difference(world, m, pos, quat)
                 break
         elif m.topic == events_topic:
-            if deserialize_message(m.data, String).data == RESET_EVENT:
+            event = deserialize_message(m.data, String).data
+            if event == RESET_EVENT:
                 stepper.reset()
                 result.resets += 1
+            elif event.startswith(ISOLATE_EVENT + " "):
+                # Bodies the node froze when the step from m.sequence went
+                # non-finite: the re-run must have frozen the same ones.
+                advance_to(m.sequence + 1, "isolation event")
+                names = event[len(ISOLATE_EVENT) + 1 :].split(",")
+                missing = [n for n in names if n not in stepper.isolated]
+                if missing:
+                    raise ResimulationError(
+                        f"the recording froze {', '.join(missing)} at step {m.sequence}; the re-run did not"
+                    )
+                result.notes.append(f"froze {', '.join(names)} at step {m.sequence}, as recorded")
         else:
             match = command_topic.match(m.topic)
             if not match:

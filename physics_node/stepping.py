@@ -2,14 +2,27 @@
 
 `Stepper` owns the order of operations so the node and `--resimulate` share
 it; neither publishes nor records anything here.
+
+A step that leaves some bodies non-finite (NonFiniteStateError) is undone,
+those bodies are frozen (physics_core/isolation.py) and the step is run
+again without them, so one bad body never stops the world; the same code
+runs in `--resimulate`, so a recorded fault is reproduced. The queue is
+bounded per body and in total (limits.py).
 """
 
+import collections
 from collections import deque
 from dataclasses import dataclass, field
 
 from physics_core import NonFiniteStateError
+from physics_core.isolation import restore, snapshot
 
-from .commands import CommandApplier, clear_command
+from .commands import QUEUE_FULL, CommandApplier, clear_command
+from .limits import MAX_QUEUED_PER_BODY, MAX_QUEUED_TOTAL
+
+# Times one step is undone and retried with more bodies frozen before the
+# world is given up on (the caller halts it until a reset).
+MAX_ISOLATIONS_PER_STEP = 3
 
 
 @dataclass
@@ -20,7 +33,9 @@ class Boundary:
     time: float  # sim time of that boundary, s
     applied: list = field(default_factory=list)
     rejected: list = field(default_factory=list)  # (command, error)
-    failure: Exception = None  # the engine's error if the step blew up
+    isolated: list = field(default_factory=list)  # names of the bodies frozen at this step
+    faults: list = field(default_factory=list)  # the NonFiniteStateErrors that froze them
+    failure: Exception = None  # the engine's error if the step could not be made
 
 
 class Stepper:
@@ -29,10 +44,18 @@ class Stepper:
         self.command_timeout = float(command_timeout)
         self.applier = CommandApplier(world)
         self._queue = deque()
+        self._per_body = collections.Counter()
         self._errors = error_types
+        self.isolated = []  # bodies frozen since the last reset, in order
 
     def submit(self, command):
+        """Queue `command` for the next boundary; None, or QUEUE_FULL if a
+        bound (limits.py) is reached and the command was not queued."""
+        if len(self._queue) >= MAX_QUEUED_TOTAL or self._per_body[command.body] >= MAX_QUEUED_PER_BODY:
+            return QUEUE_FULL
         self._queue.append(command)
+        self._per_body[command.body] += 1
+        return None
 
     @property
     def pending(self):
@@ -42,31 +65,61 @@ class Stepper:
         """Apply the queued commands, let go of timed-out wrenches, step once."""
         w = self.world
         boundary = Boundary(step=w.step_index, time=w.time)
-        while self._queue:
-            command = self._queue.popleft()
+        self._apply_queue(boundary)
+        for name in self.applier.expired(self.command_timeout):
+            command = clear_command(name)
+            self.applier.apply(command)
+            boundary.applied.append(command)
+        self._step(boundary)
+        return boundary
+
+    def _apply_queue(self, boundary):
+        queue = self._queue
+        while queue:
+            command = queue.popleft()
             try:
                 self.applier.apply(command)
             except self._errors as exc:
                 boundary.rejected.append((command, exc))
             else:
                 boundary.applied.append(command)
-        for name in self.applier.expired(self.command_timeout):
-            command = clear_command(name)
-            self.applier.apply(command)
-            boundary.applied.append(command)
-        self.applier.prepare_step()
-        try:
-            w.step()
-        except NonFiniteStateError as exc:
-            # Finite commands can still drive the state to inf (a force of
-            # 1e300 N); the caller decides what to do with a broken world.
-            boundary.failure = exc
-        return boundary
+        self._per_body.clear()
+
+    def _step(self, boundary):
+        """One engine step; undone and retried with the bodies it names frozen
+        when it leaves a non-finite state."""
+        w = self.world
+        for attempt in range(MAX_ISOLATIONS_PER_STEP + 1):
+            self.applier.prepare_step()
+            before = snapshot(w.state)
+            try:
+                w.step()
+                return
+            except NonFiniteStateError as exc:
+                # Finite commands can still drive a state to inf (loads within
+                # bounds on a body of 1e-9 kg); the step is undone either way.
+                restore(w.state, before)
+                frozen = w.isolate(exc.bodies) if attempt < MAX_ISOLATIONS_PER_STEP else []
+                if not frozen:
+                    boundary.failure = exc
+                    return
+                for name in frozen:
+                    self.applier.let_go(name)
+                self.isolated += frozen
+                boundary.isolated += frozen
+                boundary.faults.append(exc)
+            except Exception as exc:  # an engine bug: keep the world as it was, the caller halts
+                restore(w.state, before)
+                boundary.failure = exc
+                return
 
     def reset(self):
-        """World back to its initial state; queued and held commands dropped."""
-        dropped = len(self._queue)
+        """World back to its initial state; queued and held commands dropped.
+        Returns the queued commands dropped."""
+        dropped = list(self._queue)
         self._queue.clear()
+        self._per_body.clear()
         self.applier.forget()
         self.world.reset()
+        self.isolated = []
         return dropped

@@ -184,13 +184,27 @@ def test_unknown_and_static_bodies_are_refused_by_name():
 
 
 def test_non_finite_state_is_reported_with_the_body_name():
-    """A finite command can still overflow (1e308 N on 1 g): the step reports the body
-    instead of carrying inf forward."""
-    world = load_scene(scene(sphere("feather", mass=1e-3), sphere("other", position=(1, 0, 0))))
-    world.apply_force("feather", [1e308, 0.0, 0.0])
+    """A command within the bounds can still take a state beyond them (1e9 N on
+    a microgram: 1e18 m/s² past STATE_LIMIT in one step): the step reports the
+    body instead of carrying it forward."""
+    world = load_scene(scene(sphere("feather", mass=1e-9), sphere("other", position=(1, 0, 0))))
+    world.apply_force("feather", [1e9, 0.0, 0.0])
     with pytest.raises(NonFiniteStateError, match="feather") as err:
         world.step()
     assert "other" not in str(err.value)
+    assert err.value.stage == "integrate" and err.value.bodies == (0,)
+
+
+def test_loads_beyond_the_command_limits_are_refused_before_the_state_changes():
+    """Regression: a 1e300 N force or 1e200 N·s impulse used to reach the
+    broad phase as a position of 1e297 m and fail there with a numpy error."""
+    world = load_scene(scene(sphere("ball"), sphere("other", position=(1, 0, 0))))
+    for apply, value in ((world.apply_force, 1e300), (world.apply_impulse, 1e200), (world.apply_torque, 1e300),
+                         (world.apply_angular_impulse, 1e300)):
+        with pytest.raises(CommandError, match="beyond the limit"):
+            apply("ball", [value, 0.0, 0.0])
+    assert not world.state.has_pending_impulse and not world.state.user_force.any()
+    world.step()
 
 
 def test_explicit_euler_cannot_hold_a_stiff_undamped_spring():
