@@ -8,6 +8,9 @@
     physics-bench all       [--quick] [--out DIR]   all of the above
     physics-bench hostile   [--quick] [--out DIR]   floods against a node: received, counted, memory, /clock
                                                     (not part of `all`)
+    physics-bench mutations [--only WORD ...] [--list] [--cold]
+                                                    plant physics bugs one at a time; are they caught?
+                                                    (hours on 2 shared cores; not part of `all`)
 
 Each writes Markdown tables (`*.md`), plots (`*.png`) and raw data (`*.json`)
 into DIR (default benchmarks/results) and refreshes DIR/README_results.md;
@@ -76,6 +79,9 @@ def parser():
              "node": "the ROS 2 node in real time: step, publish and recording cost per step",
              "all": "every study, then the summary",
              "hostile": "floods against a running node: what reaches it, what it counts, memory, /clock"}
+    sub.add_parser("mutations", add_help=False,
+                   help="plant physics bugs one at a time and report which the tests catch "
+                        "(physics-bench mutations --help)")
     for name in STUDIES + ("all", "hostile"):
         s = sub.add_parser(name, help=helps[name])
         s.add_argument("--quick", action="store_true",
@@ -89,6 +95,10 @@ def parser():
 
 
 def main(argv=None):
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv and argv[0] == "mutations":       # its own options (benchmarks/mutations.py)
+        from . import mutations
+        return mutations.main(argv[1:])
     args = parser().parse_args(argv)
     args.out = os.path.abspath(args.out)
     ensure(args.out)
