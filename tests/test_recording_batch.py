@@ -4,9 +4,14 @@ byte for byte the same file while the batches do not straddle a chunk.
 Message by message (`write`), the file is mcap's byte for byte at any chunk
 size (with mcap's zstd level)."""
 
+import itertools
+import math
+
 import mcap
 import pytest
 from mcap.reader import make_reader
+from mcap.records import Chunk, Message
+from mcap.stream_reader import StreamReader, breakup_chunk
 from mcap.writer import CompressionType, Writer
 from nav_msgs.msg import Odometry
 from rclpy.serialization import serialize_message
@@ -40,7 +45,8 @@ def _payloads(steps):
 def _session(path, payloads, chunk_size, batched=True):
     """Clock one by one, every body's odometry per step: with write_many or with write."""
     topics = [f"/physics/{name}/odom" for name in BODIES]
-    with Recorder(path, chunk_size=chunk_size) as rec:
+    # no time-based flush: it would close a chunk wherever a slow machine happens to be
+    with Recorder(path, chunk_size=chunk_size, flush_period=math.inf) as rec:
         rec.add_metadata("physics_node", {"node": "/physics"})
         rec.channel("/clock", Clock, LATCHED)
         channels = [rec.channel(topic, Odometry, STREAM) for topic in topics]
@@ -176,3 +182,105 @@ def test_large_scenes_get_larger_chunks():
     assert recorder_module.chunk_size_for(4) == recorder_module.CHUNK_SIZE
     assert recorder_module.chunk_size_for(1000) == 1000 * recorder_module.CHUNK_BYTES_PER_BODY
     assert recorder_module.chunk_size_for(10**6) == recorder_module.MAX_CHUNK_SIZE
+
+
+# ---- a 100-body scene: the numpy packing path (batches of _SMALL_BATCH or more) ----
+MANY = tuple(f"b{i}" for i in range(100))  # names of 2 and 3 characters: messages of two sizes
+
+
+def _many_payloads(steps, names=MANY):
+    out = []
+    for k in range(steps):
+        t = 4_166_667 * k
+        odom = [serialize_message(odometry(name, [k, i, 0.5 * i], [1.0, 0, 0, 0], [0.1 * i, 0, 0], [0, 0, 0], t))
+                for i, name in enumerate(names)]
+        out.append((t, serialize_message(Clock(clock=time_msg(t))), odom))
+    return out
+
+
+def _many_session(path, payloads, chunk_size, wrap=bytes):
+    """What the node writes each step: /clock alone (the small path), then
+    every body's odometry in one write_many (the numpy path)."""
+    assert len(MANY) >= recorder_module._SMALL_BATCH
+    with Recorder(path, chunk_size=chunk_size, flush_period=math.inf) as rec:
+        clock = rec.channel("/clock", Clock, LATCHED)
+        channels = tuple(rec.channel(f"/physics/{name}/odom", Odometry, STREAM) for name in MANY)
+        for k, (t, clock_bytes, odom) in enumerate(payloads):
+            rec.write_many((clock,), (clock_bytes,), t, k)
+            datas = [wrap(d) for d in odom]
+            rec.write_many(channels, datas, t, k)
+            for d in datas:  # the recorder keeps a copy of what is not bytes: changing ours changes nothing
+                if isinstance(d, bytearray):
+                    d[-1] ^= 0xFF
+    return path
+
+
+def _messages_per_chunk(path):
+    """Message count of every chunk, in file order."""
+    counts = []
+    with open(path, "rb") as f:
+        for record in StreamReader(f, skip_magic=False, emit_chunks=True).records:
+            if isinstance(record, Chunk):
+                counts.append(sum(isinstance(r, Message) for r in breakup_chunk(record)))
+    return counts
+
+
+def _many_reference(path, payloads, chunk_messages):
+    """mcap's Writer, message by message, closing a chunk (`flush`) after the
+    same messages as the recorder did (it closes only between batches)."""
+    ends = set(itertools.accumulate(chunk_messages))
+    written = 0
+    with open(path, "wb") as f:
+        s = _McapSession(f, 1 << 40)  # its own chunking off: it closes where told
+        clock = s.channel("/clock", Clock, LATCHED)
+        channels = [s.channel(f"/physics/{name}/odom", Odometry, STREAM) for name in MANY]
+        for k, (t, clock_bytes, odom) in enumerate(payloads):
+            for channel, data in [(clock, clock_bytes), *zip(channels, odom)]:
+                s.add(channel, data, t, k)
+                written += 1
+                if written in ends:
+                    s.writer.flush()
+        s.writer.finish()
+    return path
+
+
+@pytest.mark.parametrize("chunk_size", [1 << 24, 20_000, 200_000])  # one chunk; every step; every few steps
+def test_hundred_body_batches_are_mcap_writers_file_byte_for_byte(tmp_path, mcap_level, chunk_size):
+    steps = 30
+    payloads = _many_payloads(steps)
+    ours = _many_session(tmp_path / "ours.mcap", payloads, chunk_size)
+    chunks = _messages_per_chunk(ours)
+    assert sum(chunks) == steps * (1 + len(MANY))
+    if chunk_size < 1 << 24:
+        # closed between batches only (after a step's /clock or after its odometry)
+        assert len(chunks) > 3 and all(n % (1 + len(MANY)) in (0, 1) for n in itertools.accumulate(chunks))
+    else:
+        assert chunks == [steps * (1 + len(MANY))]
+    theirs = _many_reference(tmp_path / "theirs.mcap", payloads, chunks)
+    assert ours.read_bytes() == theirs.read_bytes()
+
+
+def test_hundred_body_batches_read_back_through_mcaps_reader(tmp_path):
+    """Whatever the zstd level and chunking, mcap's reader gets every message
+    back with its channel, times, step and bytes, and the summary counts them."""
+    steps = 12
+    payloads = _many_payloads(steps)
+    path = _many_session(tmp_path / "ours.mcap", payloads, 30_000, wrap=bytearray)
+    with open(path, "rb") as f:
+        reader = make_reader(f)
+        got = [(c.topic, m.log_time, m.publish_time, m.sequence, m.data) for _, c, m in reader.iter_messages()]
+        summary = reader.get_summary()
+    want = []
+    for k, (t, clock_bytes, odom) in enumerate(payloads):
+        want.append(("/clock", t, t, k, clock_bytes))
+        want += [(f"/physics/{name}/odom", t, t, k, data) for name, data in zip(MANY, odom)]
+    assert got == want
+    stats = summary.statistics
+    assert stats.message_count == steps * (1 + len(MANY))
+    assert set(stats.channel_message_counts.values()) == {steps}
+    assert (stats.message_start_time, stats.message_end_time) == (0, payloads[-1][0])
+    assert stats.chunk_count == len(summary.chunk_indexes) > 1
+    # each chunk's index finds its messages: one body's odometry, read on its own
+    with open(path, "rb") as f:
+        one = [m.sequence for _, _, m in make_reader(f).iter_messages(topics=["/physics/b57/odom"])]
+    assert one == list(range(steps))
