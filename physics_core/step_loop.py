@@ -98,13 +98,23 @@ def run_steps(n, substeps, dt, code, idata, body, loads, masses, work, contacts,
     return n, -1
 
 
+def _read_only(a):
+    a.flags.writeable = False
+    return a
+
+
 def no_contacts():
-    """(contacts, warm cache, event state) of a scene without the contacts effect."""
+    """(contacts, warm cache, event state) of a scene without the contacts effect.
+    The arrays a real ContactModel takes from the model (material onwards) are
+    read-only there, so they are here too: the step then has the same Numba
+    types with or without contacts and loads the kernels `make install`
+    compiled, instead of compiling a second set at a scene's first step
+    (tens of seconds on a loaded machine)."""
     from .collision.contact_data import N_FP, N_IP, ContactModel, new_sleep_state, new_warm_cache
     from .collision.event_log import new_event_state
     z = np.zeros(0)
     cm = ContactModel(np.zeros(0, np.int64), np.zeros((0, 8)), np.zeros(0, np.bool_), z,
-                      np.zeros(0, np.int64), z, z, np.zeros((0, 3)), np.zeros((1, 1)),
-                      np.zeros((1, 1)))
+                      _read_only(np.zeros(0, np.int64)), _read_only(np.zeros(0)), _read_only(np.zeros(0)),
+                      _read_only(np.zeros((0, 3))), _read_only(np.zeros((1, 1))), _read_only(np.zeros((1, 1))))
     return ((cm, np.zeros(N_FP), np.zeros(N_IP, np.int64), new_sleep_state(0), np.zeros(1, np.int64)),
             new_warm_cache(), new_event_state())
