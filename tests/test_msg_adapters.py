@@ -322,3 +322,51 @@ def test_reusing_builders_give_the_same_messages_as_fresh_ones():
         # zeroed, so equal messages need not serialize to equal bytes.
         assert markers.build(pos, quat, contacts, stamp) == scene_markers(_Model, pos, quat, contacts, stamp)
         assert odom.build(pos, quat, vel, omega, stamp) == odometries(_Model.names, pos, quat, vel, omega, stamp)
+
+
+# Types the node does not record, for the schema builder's other spellings:
+# a bounded sequence (SolidPrimitive's float64[<=3] dimensions) and bounded
+# strings (FieldType's string<=255 nested_type_name), with constants.
+def _other_types():
+    from shape_msgs.msg import SolidPrimitive
+    from type_description_interfaces.msg import FieldType
+
+    return [SolidPrimitive, FieldType]
+
+
+@pytest.mark.parametrize("cls", _other_types(), ids=lambda c: c.__name__)
+def test_bounded_spellings_match_the_reference_definitions(cls):
+    from rosbags.typesys import Stores, get_typestore
+
+    reference = get_typestore(Stores.ROS2_JAZZY).fielddefs
+    text = ros2msg_schema(cls)
+    assert "[<=3]" in text or "string<=" in text
+    parsed = _parse_schema(text, type_name(cls))
+    for name, (consts, fields) in parsed.items():
+        assert fields == reference[name][1], name
+        assert {c[0]: c[2] for c in consts} == {c[0]: c[2] for c in reference[name][0]}, name
+
+
+@pytest.mark.parametrize("value, line", [
+    (True, "bool C=true"), (False, "bool C=false"), (b"\x07", "byte C=7"),
+    (-(2**31), "int32 C=-2147483648"), (2**31 - 1, "int32 C=2147483647"),
+    (2**31, "int64 C=2147483648"), (-(2**31) - 1, "int64 C=-2147483649"),
+    (2**63 - 1, "int64 C=9223372036854775807"), (2**63, "uint64 C=9223372036854775808"),
+    (0.1, "float64 C=0.1"), ("map", "string C=map"),
+])
+def test_constant_lines_spell_the_type_the_value_needs(value, line):
+    from msg_adapters.schema import _constant_line
+
+    assert _constant_line("C", value) == line
+
+
+def test_wide_strings_are_spelled_and_an_unknown_type_is_refused_by_name():
+    from rosidl_parser import definition as idl
+
+    from msg_adapters.schema import _element_text, _field_text
+
+    assert _element_text(idl.UnboundedWString()) == ("wstring", None)
+    assert _element_text(idl.BoundedWString(7)) == ("wstring<=7", None)
+    assert _field_text(idl.BoundedSequence(idl.BoundedString(5), 4)) == ("string<=5[<=4]", None)
+    with pytest.raises(TypeError, match="no .msg spelling for"):
+        _element_text(idl.NamedType("Mystery"))
