@@ -13,16 +13,16 @@ collection error, a timeout or a line that is no longer in the file is
 reported as such and is not counted as caught.
 
 Numba's cache: a cached kernel does not notice that a kernel it calls from
-another file changed. The unchanged run compiles into an empty
-NUMBA_CACHE_DIR; each mutant then runs on a fresh copy of that cache with
+another file changed. Each mutant runs on a fresh copy of this checkout's
+own compiled kernels (`make install` / `python -m physics_core.warm_up`
+made them; the copy reads them through benchmarks/mutant_pytest.py) with
 every entry of the mutated file, and of every file that imports it directly
-or through others (the import graph of the copy, `dependents`), removed, so
-everything that can reach the changed line is compiled anew and nothing
-else is. A stale entry could only hide a mutation (the unchanged code would
-run), never fake a catch, so every survivor is run again with an empty
-cache (`--cold` does that for every mutant: about three minutes each on
-two shared cores instead of one). Mutants run one after the other under
-`nice`.
+or through others (the import graph, `dependents`), removed: everything
+that can reach the changed line is compiled anew, nothing else is. A stale
+entry could only hide a mutation (the unchanged code would run), never fake
+a catch, so a survivor is run again with an empty cache. `--cold` gives
+every mutant an empty cache (a full compile each: several minutes on two
+shared cores). Mutants run one after the other under `nice`.
 
 Writes DIR/mutations.md and DIR/mutations.json (default benchmarks/results).
 Not part of `make test` or `physics-bench all`: it takes about an hour.
@@ -129,10 +129,31 @@ def _cache_folder(py_file):
     return "_".join([os.path.split(subpath)[-1], hashlib.sha1(subpath.encode()).hexdigest()])
 
 
-def prune_cache(cache, files):
-    """Remove the cached kernels of `files` from a Numba cache folder; returns how many."""
+def warm_cache(repo=REPO):
+    """This checkout's compiled kernels (physics_core/kernel_cache.py's folder
+    for the current source), compiling them first if there are none."""
+    sys.path.insert(0, repo)
+    try:
+        from physics_core.kernel_cache import PREFIX, source_hash
+    finally:
+        sys.path.pop(0)
+    folder = os.path.join(repo, "physics_core", "__pycache__", PREFIX + source_hash(os.path.join(repo, "physics_core")))
+    if not os.path.isdir(folder):
+        sys.stderr.write("[mutations] compiling this checkout's kernels first (physics_core.warm_up)\n")
+        env = dict(os.environ, PYTHONPATH=repo)
+        env.pop("NUMBA_CACHE_DIR", None)
+        subprocess.run(["nice", "-n", "10", sys.executable, "-m", "physics_core.warm_up"], cwd=repo, env=env,
+                       check=True)
+    return folder
+
+
+def prune_cache(cache, files, copy=None, repo=REPO):
+    """Remove the cached kernels of `files` (paths in `copy`, filed under their
+    originals in `repo`) from a Numba cache folder; returns how many."""
     removed = 0
     for py_file in files:
+        if copy is not None:
+            py_file = os.path.join(repo, os.path.relpath(py_file, copy))
         folder = os.path.join(cache, _cache_folder(py_file))
         prefix = os.path.splitext(os.path.basename(py_file))[0] + "."
         if not os.path.isdir(folder):
@@ -174,14 +195,15 @@ def check(mutation, repo=REPO):
         return locate(f.read(), mutation)[1]
 
 
-def pytest_run(copy, tests, timeout, label, cache=None, keep_cache=False):
+def pytest_run(copy, tests, timeout, label, cache=None):
     """(status, seconds, last lines of output) of `pytest -x tests` in the copy
-    with the Numba cache folder `cache` (None: a new, empty one); the folder is
-    removed afterwards unless keep_cache."""
+    with the Numba cache folder `cache`, read as this checkout's (None: a new,
+    empty one); the folder is removed afterwards."""
+    aliased = cache is not None
     cache = cache or tempfile.mkdtemp(prefix="numba-", dir=os.path.dirname(copy))
     env = dict(os.environ, PYTHONPATH=copy, NUMBA_CACHE_DIR=cache, PYTHONDONTWRITEBYTECODE="1")
-    cmd = ["nice", "-n", "10", sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
-           *tests]
+    runner = ["-m", "benchmarks.mutant_pytest", REPO, copy] if aliased else ["-m", "pytest"]
+    cmd = ["nice", "-n", "10", sys.executable, *runner, "-x", "-q", "-p", "no:cacheprovider", *tests]
     t0 = perf_counter()
     try:
         proc = subprocess.run(cmd, cwd=copy, env=env, capture_output=True, text=True, timeout=timeout)
@@ -189,8 +211,7 @@ def pytest_run(copy, tests, timeout, label, cache=None, keep_cache=False):
     except subprocess.TimeoutExpired as e:
         code, output = None, (e.stdout or b"").decode(errors="replace") if isinstance(e.stdout, bytes) else (e.stdout or "")
     finally:
-        if not keep_cache:
-            shutil.rmtree(cache, ignore_errors=True)
+        shutil.rmtree(cache, ignore_errors=True)
     seconds = perf_counter() - t0
     status = {0: SURVIVED, 1: CAUGHT, None: "timeout"}.get(code, f"error (pytest exit {code})")
     tail = "\n".join(output.strip().splitlines()[-6:])
@@ -213,9 +234,8 @@ def run_mutant(copy, mutation, timeout, warm=None):
             f.write(mutated)
         cache = None
         if warm is not None:
-            cache = tempfile.mkdtemp(prefix="numba-", dir=os.path.dirname(copy))
-            shutil.copytree(warm, cache, dirs_exist_ok=True)
-            prune_cache(cache, dependents(copy, path))
+            cache = _cache_copy(warm, copy)
+            prune_cache(cache, dependents(copy, path), copy)
         status, seconds, tail = pytest_run(copy, mutation.tests, timeout, mutation.name, cache)
         if status == SURVIVED and warm is not None:  # make sure no stale kernel hid it
             status, more, tail = pytest_run(copy, mutation.tests, timeout, mutation.name + " (cold)")
@@ -224,6 +244,12 @@ def run_mutant(copy, mutation, timeout, warm=None):
         with open(path, "w", encoding="utf-8") as f:
             f.write(original)
     return {"status": status, "seconds": seconds, "tail": tail}
+
+
+def _cache_copy(warm, copy):
+    cache = tempfile.mkdtemp(prefix="numba-", dir=os.path.dirname(copy))
+    shutil.copytree(warm, cache, dirs_exist_ok=True)
+    return cache
 
 
 def select(words):
@@ -260,12 +286,12 @@ def run(only=None, out=DEFAULT_OUT, timeout=900.0, baseline=True, cold=False):
     scratch = tempfile.mkdtemp(prefix="physics-mutations-")
     try:
         copy = copy_repo(os.path.join(scratch, "repo"))
-        base, warm = None, None
+        # a snapshot: the checkout's own folder goes when its source changes
+        base, warm = None, (None if cold else _cache_copy(warm_cache(), copy))
         if baseline:
             tests = sorted({t for m in chosen for t in m.tests})
-            warm = None if cold else os.path.join(scratch, "numba-unchanged")
-            status, seconds, tail = pytest_run(copy, tests, timeout * 3, "unchanged source", warm,
-                                               keep_cache=True)
+            status, seconds, tail = pytest_run(copy, tests, timeout * 3, "unchanged source",
+                                               None if cold else _cache_copy(warm, copy))
             base = {"status": "pass" if status == SURVIVED else status, "seconds": seconds, "tail": tail}
             if status != SURVIVED:
                 sys.stderr.write(f"[mutations] the unchanged tests do not pass:\n{tail}\n")
@@ -287,8 +313,7 @@ def parser():
     p.add_argument("--only", nargs="+", metavar="WORD", help="mutations whose name contains WORD, or a stage")
     p.add_argument("--list", action="store_true", help="list the mutations and check they apply; run nothing")
     p.add_argument("--timeout", type=float, default=900.0, help="seconds per mutant (default %(default)s)")
-    p.add_argument("--no-baseline", action="store_true",
-                   help="skip the run on the unchanged source (every mutant then compiles cold)")
+    p.add_argument("--no-baseline", action="store_true", help="skip the run on the unchanged source")
     p.add_argument("--cold", action="store_true", help="an empty Numba cache for every mutant")
     p.add_argument("--out", default=DEFAULT_OUT, help="output folder (default: %(default)s)")
     return p
