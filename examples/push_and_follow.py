@@ -10,6 +10,12 @@ A wrench is held on the body for `--seconds` of sim time, then released (a
 zero wrench); an impulse is applied once. Meanwhile the body's odometry is
 printed a few times per sim second. The node runs on sim time from /clock,
 like any other node in a simulation.
+
+The push counts from when it acts: the script waits until the physics node
+has acknowledged the message (reliable delivery; on a loaded machine that can
+take longer than the whole push), then follows from the first odometry whose
+velocity differs from the one before the push, or, if the body does not
+respond (pushed into the ground), from the sim time at which it was sent.
 """
 
 import argparse
@@ -20,6 +26,7 @@ import rclpy
 from rclpy.executors import ExternalShutdownException
 from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
+from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
@@ -32,8 +39,10 @@ class PushAndFollow(Node):
         kind = "impulse" if args.impulse else "wrench"
         self.command = self.create_publisher(WrenchStamped, f"{base}/{kind}", 10)
         self.create_subscription(Odometry, f"{base}/odom", self.on_odom, 10)
-        self.pushed_at = None  # sim seconds
+        self.pushed_at = None  # sim seconds: when the push took effect
+        self.sent_at = None  # sim seconds of the newest odometry when it was sent
         self.latest_stamp = None  # sim seconds of the newest odometry
+        self.twist = None  # the newest odometry's velocity, to see when the push acts
         self.last_print = -1.0
         self.done = False
 
@@ -44,10 +53,17 @@ class PushAndFollow(Node):
         msg.header.frame_id = self.args.body if self.args.frame == "body" else "world"
         msg.wrench.force.x, msg.wrench.force.y, msg.wrench.force.z = (float(v) for v in vector)
         self.command.publish(msg)
+        # reliable delivery: returns once the physics node has the message
+        return self.command.wait_for_all_acked(Duration(seconds=self.args.wait))
 
     def on_odom(self, msg):
         t = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
-        self.latest_stamp = t
+        twist = msg.twist.twist
+        twist = (twist.linear.x, twist.linear.y, twist.linear.z, twist.angular.x, twist.angular.y, twist.angular.z)
+        moved = self.sent_at is not None and twist != self.twist and t > self.sent_at
+        self.latest_stamp, self.twist = t, (self.twist if self.sent_at is not None else twist)
+        if self.pushed_at is None and moved:
+            self.pushed_at = t - 1e-9  # the first step the push acted in
         if self.pushed_at is None or t < self.pushed_at:
             return  # odometry from before the push
         if t - self.last_print >= 1.0 / self.args.print_rate:
@@ -88,16 +104,20 @@ def main(argv=None):
                 print(f"no running physics node on {node.command.topic_name}", file=sys.stderr)
                 return 1
             rclpy.spin_once(node, timeout_sec=0.05)
-        node.push(args.impulse or args.force)
-        node.pushed_at = node.latest_stamp
+        node.sent_at = node.latest_stamp
+        if not node.push(args.impulse or args.force):
+            print(f"the physics node did not acknowledge {node.command.topic_name}", file=sys.stderr)
+            return 1
         print(f"{'impulse' if args.impulse else 'force'} {args.impulse or args.force} sent on "
-              f"{node.command.topic_name} at t={node.pushed_at:.3f} s", flush=True)
-        deadline = time.monotonic() + args.wait + args.seconds * 100
+              f"{node.command.topic_name} at t={node.sent_at:.3f} s", flush=True)
+        respond_by = time.monotonic() + args.wait
+        deadline = respond_by + args.seconds * 100
         while not node.done and time.monotonic() < deadline:
             rclpy.spin_once(node, timeout_sec=0.05)
+            if node.pushed_at is None and time.monotonic() > respond_by:
+                node.pushed_at = node.sent_at  # the body did not respond: count from the send
         if args.impulse is None:
-            node.push([0.0, 0.0, 0.0])  # let go
-            time.sleep(0.2)
+            node.push([0.0, 0.0, 0.0])  # let go (waits until the node has it)
         return 0
     except (KeyboardInterrupt, ExternalShutdownException):  # Ctrl-C, or SIGTERM through rclpy's handler
         return 0

@@ -121,11 +121,12 @@ def how_to_push(node):
     ns = node.get_fully_qualified_name()
     python = os.path.relpath(sys.executable) if not os.path.isabs(os.path.relpath(sys.executable)) else sys.executable
     one_liner = (
-        f"{python} -c \"import rclpy, time; from geometry_msgs.msg import WrenchStamped as W; rclpy.init(); "
+        f"{python} -c \"import rclpy, time; from geometry_msgs.msg import WrenchStamped as W; "
+        f"from rclpy.duration import Duration; rclpy.init(); "
         f"n = rclpy.create_node('pusher'); p = n.create_publisher(W, '{ns}/{body}/impulse', 10); "
         f"m = W(); m.header.frame_id = 'world'; m.wrench.force.x = 2.0; m.wrench.force.z = 3.0; "
         f"[time.sleep(0.1) for _ in range(100) if p.get_subscription_count() == 0]; "
-        f"p.publish(m); time.sleep(0.5)\""
+        f"p.publish(m); p.wait_for_all_acked(Duration(seconds=10))\""
     )
     lines = [
         f"physics: {len(node.model.names)} bodies ({', '.join(node.model.names)}) from {node.scene_path}",

@@ -40,20 +40,41 @@ def sim(tmp_path_factory):
         driver.listen(Odometry, "/physics/box/odom")
         driver.listen(Clock, "/clock", CLOCK_QOS)
         driver.listen(DiagnosticArray, "/diagnostics")
-        driver.call(Trigger, "/physics/step", timeout=20.0)  # waits until the node is up
+        driver.call(Trigger, "/physics/step", timeout=60.0)  # waits until the node is up (a condition, not a sleep)
         yield node, driver
     finally:
         driver.close()
         node.stop()
 
 
+STATE_TOPICS = ("/clock", "/physics/poses", "/physics/ball/odom", "/physics/box/odom")
+
+
+def stamp_of(msg):
+    return time_ns(msg.clock if isinstance(msg, Clock) else msg.header.stamp)
+
+
+def settle_reset(driver):
+    """Wait until the reset's own messages (stamped 0) are the newest on every
+    state topic, then empty the inboxes. Each topic arrives in the order it
+    was sent, so whatever the node sent before the reset has come by then
+    and cannot be mistaken for what a test steps next."""
+    boxes = [driver.received[t] for t in STATE_TOPICS]
+    driver.spin_until(lambda: all(box and stamp_of(box[-1]) == 0 for box in boxes), 10.0,
+                      "the reset's messages on " + ", ".join(STATE_TOPICS))
+    newest = {t: box[-1] for t, box in zip(STATE_TOPICS, boxes)}
+    for box in driver.received.values():
+        box.clear()
+    return newest
+
+
 def fresh(driver):
     """Paused, reset, nothing left in the inboxes."""
     driver.call(Empty, "/pause_physics")
-    driver.call(Empty, "/reset_simulation")
-    driver.spin_for(0.2)
     for box in driver.received.values():
         box.clear()
+    driver.call(Empty, "/reset_simulation")
+    settle_reset(driver)
 
 
 def step(driver, n):
@@ -73,9 +94,9 @@ def latest(driver, topic, stamp_ns=None, timeout=5.0):
 
 
 def send(driver, topic, force, torque=(0, 0, 0), frame="world"):
+    """Publish a command and wait until the node has it (so the next step applies it)."""
     pub = driver.wait_for_subscriber(WrenchStamped, topic)
-    pub.publish(wrench_stamped(force, torque, frame_id=frame))
-    driver.spin_for(0.3)  # let it arrive before the next step boundary
+    driver.publish_acked(pub, wrench_stamped(force, torque, frame_id=frame))
 
 
 def test_held_wrench_moves_body_by_f_over_m(sim):
@@ -95,12 +116,11 @@ def test_held_wrench_moves_body_by_f_over_m(sim):
 
     # Running at the fixed rate, the force stays held.
     driver.call(Empty, "/unpause_physics")
-    driver.spin_for(0.6)
+    poses = latest(driver, "/physics/poses", (k + 30) * FREE_DT_NS, timeout=20.0)
     driver.call(Empty, "/pause_physics")
-    driver.spin_for(0.3)
-    poses = latest(driver, "/physics/poses")
+    # any pose will do: its own stamp says how many steps the force has acted
     n = round(time_ns(poses.header.stamp) / FREE_DT_NS)
-    assert n > k + 20, "the node should have stepped while running"
+    assert n >= k + 30, "the node should have stepped while running"
     x = arrays_from_pose_array(poses)[0][0, 0] - BALL_START[0]
     assert x == pytest.approx(a * DT**2 * n * (n + 1) / 2, rel=1e-9)
     t = n * DT
@@ -160,19 +180,21 @@ def test_pause_stops_clock_step_advances_one_dt_reset_restores(sim):
     assert not refused.success and "paused" in refused.message
     driver.spin_until(lambda: time_ns(clocks[-1].clock) > before + 20 * FREE_DT_NS, 5.0, "clock while running")
 
-    send(driver, "/physics/ball/impulse", (1.0, 0, 0))
+    # a held force, seen acting before the reset, must be let go by it
+    send(driver, "/physics/ball/wrench", (1.0, 0, 0))
+    odoms = driver.received["/physics/ball/odom"]
+    driver.spin_until(lambda: odoms and state_from_odometry(odoms[-1])[2][0] > 0, 5.0, "the force acting")
     driver.call(Empty, "/pause_physics")
     driver.call(Empty, "/reset_world")
-    driver.spin_until(lambda: time_ns(clocks[-1].clock) == 0, 5.0, "clock back at 0")
-    # /clock and the poses of the reset are separate topics: either may arrive first.
-    box = driver.received["/physics/poses"]
-    driver.spin_until(lambda: box and time_ns(box[-1].header.stamp) == 0, 5.0, "the poses of the reset")
-    poses = box[-1]
+    # order by stamps, not by arrival: the reset's own messages (stamped 0)
+    # come after everything the running node sent before it, topic by topic
+    poses = settle_reset(driver)["/physics/poses"]
     pos, quat = arrays_from_pose_array(poses)
     assert np.array_equal(pos, [BALL_START, BOX_START])
     assert quat[0] == pytest.approx([1, 0, 0, 0])
     step(driver, 1)
     odom = latest(driver, "/physics/ball/odom", FREE_DT_NS)
+    assert time_ns(odom.header.stamp) == FREE_DT_NS
     assert state_from_odometry(odom)[2] == pytest.approx([0, 0, 0], abs=0), "reset let go of every command"
 
 
@@ -291,7 +313,11 @@ def test_push_and_follow_example_moves_the_body(sim):
         example.stop()
     lines = [line for line in example.log().splitlines() if line.startswith("t=")]
     assert lines, example.log()
-    assert "+0.0000, +0.0000, +1.0000" not in lines[-1], "the ball should have moved along x"
+    assert "+0.0000, +0.0000, +1.0000" not in lines[-1], "the ball should have moved along x:\n" + example.log()
+    # and the node agrees: let go after the push, the ball coasts along +x only
+    odom = latest(driver, "/physics/ball/odom")
+    _, _, vel, _ = state_from_odometry(odom)
+    assert vel[0] > 0 and vel[1] == 0 and vel[2] == 0
 
 
 def test_the_printed_one_liner_pushes_the_ball(sim):
@@ -304,8 +330,8 @@ def test_the_printed_one_liner_pushes_the_ball(sim):
     log = node.log()
     assert "ros2 topic pub --once /physics/ball/impulse" in log
     one_liner = next(line.strip() for line in log.splitlines() if '-c "import rclpy' in line)
+    # the one-liner returns once the node has acknowledged its impulse
     subprocess.run(one_liner, shell=True, cwd=REPO, env=node_env(), check=True, timeout=30)
-    driver.spin_for(0.2)
     step(driver, 1)
     odom = latest(driver, "/physics/ball/odom", FREE_DT_NS)
     assert state_from_odometry(odom)[2] == pytest.approx([2.0 / BALL_MASS, 0, 3.0 / BALL_MASS], abs=1e-12)

@@ -173,6 +173,17 @@ class Driver:
             self._publishers[topic] = pub
         return pub
 
+    def publish_acked(self, pub, msg, timeout=10.0):
+        """Publish and return once every matched subscriber has acknowledged
+        the message (reliable delivery): the node has it before anything this
+        process sends next, e.g. a ~/step request (its executor takes
+        callbacks in the order their messages arrived)."""
+        from rclpy.duration import Duration
+
+        pub.publish(msg)
+        if not pub.wait_for_all_acked(Duration(seconds=timeout)):
+            pytest.fail(f"{pub.topic_name}: the message was not acknowledged within {timeout} s")
+
     def wait_for_subscriber(self, msg_type, topic, timeout=10.0):
         pub = self.publisher(msg_type, topic)
         self.spin_until(lambda: pub.get_subscription_count() > 0, timeout, f"no subscriber on {topic}")

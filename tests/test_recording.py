@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from mcap.exceptions import McapError
 from mcap.reader import make_reader
 from mcap.writer import Writer
 from test_node_support import FREE_SCENE, Driver, NodeProcess, run_cli
@@ -61,16 +62,15 @@ def session(tmp_path_factory):
         node.wait_until_up()
         thrust = driver.wait_for_subscriber(WrenchStamped, "/physics/box/wrench")
         kick = driver.wait_for_subscriber(WrenchStamped, "/physics/ball/impulse")
-        thrust.publish(wrench_stamped((5.0, 0, 0), (0, 0, 0.2), frame_id="box"))
-        kick.publish(wrench_stamped((0, 1.0, 4.0), (0.1, 0, 0)))
-        kick.publish(wrench_stamped((float("nan"), 0, 0)))  # dropped, so never recorded
-        driver.spin_for(0.3)
+        # each acknowledged before the next request, so the node has it by then
+        driver.publish_acked(thrust, wrench_stamped((5.0, 0, 0), (0, 0, 0.2), frame_id="box"))
+        driver.publish_acked(kick, wrench_stamped((0, 1.0, 4.0), (0.1, 0, 0)))
+        driver.publish_acked(kick, wrench_stamped((float("nan"), 0, 0)))  # dropped, so never recorded
         for _ in range(5):
             assert driver.call(Trigger, "/physics/step").success
         driver.call(Empty, "/reset_simulation")
-        kick.publish(wrench_stamped((0.5, 0, 0), frame_id="ball"))
-        thrust.publish(wrench_stamped((0, 2.0, 0), frame_id="box"))
-        driver.spin_for(0.3)
+        driver.publish_acked(kick, wrench_stamped((0.5, 0, 0), frame_id="ball"))
+        driver.publish_acked(thrust, wrench_stamped((0, 2.0, 0), frame_id="box"))
         driver.call(Empty, "/unpause_physics")
         assert node.wait(30.0) == 0, node.log()
     return path, scene
@@ -222,6 +222,14 @@ def test_kill_9_leaves_a_readable_recording(tmp_path):
         assert sum(1 for _ in reader.messages()) > 0
 
 
+def _count(path, topic):
+    """Messages on `topic` in the chunks written so far (0 before the first)."""
+    try:
+        return sum(1 for m in Recording(path).messages() if m.topic == topic)
+    except (OSError, ValueError, McapError):  # not there yet, or its first chunk is being written
+        return 0
+
+
 def test_sigint_finishes_the_file_and_ros_args_set_parameters(tmp_path):
     scene = tmp_path / "free.yaml"
     scene.write_text(FREE_SCENE)
@@ -230,7 +238,10 @@ def test_sigint_finishes_the_file_and_ros_args_set_parameters(tmp_path):
     args += ["-p", "publish_every:=4"]
     with NodeProcess(args, tmp_path, isolated=True) as node:
         node.wait_until_up()
-        time.sleep(0.5)
+        # wait for what is asserted below (enough clock ticks on disk), not for a time
+        deadline = time.monotonic() + 30.0
+        while _count(path, "/clock") <= 8 and time.monotonic() < deadline:
+            time.sleep(0.1)
         node.signal(signal.SIGINT)
         assert node.wait() == 0, node.log()
     assert Recording(path).complete
@@ -277,7 +288,9 @@ def test_replay_republishes_with_clock(session):
             # can go when their publisher's process exits.
             driver.spin_until(lambda: not replay.alive(), 30.0, "the replay to finish")
             assert replay.wait() == 0, replay.log()
-            driver.spin_for(0.3)
+            # it exits once its last messages are acknowledged: take them in
+            driver.spin_until(lambda: clocks and time_ns(clocks[-1].clock) == round(DURATION * 1e9), 10.0,
+                              "the replay's last /clock")
         finally:
             replay.stop()
     assert "replayed" in replay.log()
