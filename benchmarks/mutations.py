@@ -20,7 +20,7 @@ every entry of the mutated file, and of every file that imports it directly
 or through others (the import graph, `dependents`), removed: everything
 that can reach the changed line is compiled anew, nothing else is. A stale
 entry could only hide a mutation (the unchanged code would run), never fake
-a catch, so a survivor is run again with an empty cache. `--cold` gives
+a catch; `--recheck` runs a survivor again on an empty cache. `--cold` gives
 every mutant an empty cache (a full compile each: several minutes on two
 shared cores). Mutants run one after the other under `nice`.
 
@@ -68,28 +68,38 @@ def _module_files(root):
                 yield os.path.join(folder, name)
 
 
-def _candidates(root, path, node):
-    """Files an import statement may load (an over-approximation: every
-    reading of the dotted name that exists in the tree)."""
-    if isinstance(node, ast.Import):
-        names = [a.name for a in node.names]
-        bases = [root, os.path.join(root, "tests")]
-    else:
-        if node.level:
-            base = os.path.dirname(path)
-            for _ in range(node.level - 1):
-                base = os.path.dirname(base)
-            bases = [base]
-        else:
-            bases = [root, os.path.join(root, "tests")]
-        head = node.module or ""
-        names = [head] + [f"{head}.{a.name}" if head else a.name for a in node.names]
+def _resolve(bases, name):
+    """Files `name` (dotted, may be empty: the base package) can be, under any base."""
+    out = []
     for base in bases:
-        for name in names:
-            stem = os.path.join(base, *name.split(".")) if name else base
-            for cand in (stem + ".py", os.path.join(stem, "__init__.py")):
-                if os.path.isfile(cand):
-                    yield os.path.normpath(cand)
+        stem = os.path.join(base, *name.split(".")) if name else base
+        for cand in (stem + ".py", os.path.join(stem, "__init__.py")):
+            if os.path.isfile(cand):
+                out.append(os.path.normpath(cand))
+    return out
+
+
+def _candidates(root, path, node):
+    """Files an import statement binds names from: the module itself, or for
+    `from pkg import x` the submodule pkg/x.py when there is one, else pkg's
+    __init__ (a name it defines or re-exports). Absolute names are looked up
+    from the repository root and from tests/ (pytest puts it on the path)."""
+    tops = [root, os.path.join(root, "tests")]
+    if isinstance(node, ast.Import):
+        return [f for a in node.names for f in _resolve(tops, a.name)]
+    if node.level:
+        base = os.path.dirname(path)
+        for _ in range(node.level - 1):
+            base = os.path.dirname(base)
+        bases = [base]
+    else:
+        bases = tops
+    head = node.module or ""
+    out = []
+    for a in node.names:
+        sub = _resolve(bases, f"{head}.{a.name}" if head else a.name)
+        out += sub or _resolve(bases, head)
+    return out
 
 
 def import_graph(root):
@@ -219,7 +229,7 @@ def pytest_run(copy, tests, timeout, label, cache=None):
     return status, seconds, tail
 
 
-def run_mutant(copy, mutation, timeout, warm=None):
+def run_mutant(copy, mutation, timeout, warm=None, recheck=False):
     """Apply, test, restore. warm: the unchanged run's cache folder, reused
     without the kernels the mutation can reach (None: an empty cache)."""
     path = os.path.join(copy, mutation.path)
@@ -237,7 +247,7 @@ def run_mutant(copy, mutation, timeout, warm=None):
             cache = _cache_copy(warm, copy)
             prune_cache(cache, dependents(copy, path), copy)
         status, seconds, tail = pytest_run(copy, mutation.tests, timeout, mutation.name, cache)
-        if status == SURVIVED and warm is not None:  # make sure no stale kernel hid it
+        if status == SURVIVED and warm is not None and recheck:  # make sure no stale kernel hid it
             status, more, tail = pytest_run(copy, mutation.tests, timeout, mutation.name + " (cold)")
             seconds += more
     finally:
@@ -278,7 +288,7 @@ def report(rows, baseline, out):
     return caught
 
 
-def run(only=None, out=DEFAULT_OUT, timeout=900.0, baseline=True, cold=False):
+def run(only=None, out=DEFAULT_OUT, timeout=900.0, baseline=True, cold=False, recheck=False):
     chosen = select(only)
     bad = [(m.name, check(m)) for m in chosen if check(m)]
     for name, reason in bad:
@@ -299,7 +309,7 @@ def run(only=None, out=DEFAULT_OUT, timeout=900.0, baseline=True, cold=False):
                 return 2
         rows = []
         for m in chosen:
-            rows.append({**asdict(m), **run_mutant(copy, m, timeout, warm)})
+            rows.append({**asdict(m), **run_mutant(copy, m, timeout, warm, recheck)})
             report(rows, base, ensure(out))          # progress on disk after every mutant
         caught = report(rows, base, ensure(out))
     finally:
@@ -315,6 +325,7 @@ def parser():
     p.add_argument("--timeout", type=float, default=900.0, help="seconds per mutant (default %(default)s)")
     p.add_argument("--no-baseline", action="store_true", help="skip the run on the unchanged source")
     p.add_argument("--cold", action="store_true", help="an empty Numba cache for every mutant")
+    p.add_argument("--recheck", action="store_true", help="run a survivor again on an empty Numba cache")
     p.add_argument("--out", default=DEFAULT_OUT, help="output folder (default: %(default)s)")
     return p
 
@@ -328,7 +339,7 @@ def main(argv=None):
             print(f"{m.stage:12s} {m.name}" + (f"  [CANNOT APPLY: {problem}]" if problem else ""))
         print(f"{len(chosen)} mutations over {len({m.stage for m in chosen})} stages")
         return 1 if any(check(m) for m in chosen) else 0
-    return run(args.only, os.path.abspath(args.out), args.timeout, not args.no_baseline, args.cold)
+    return run(args.only, os.path.abspath(args.out), args.timeout, not args.no_baseline, args.cold, args.recheck)
 
 
 if __name__ == "__main__":
