@@ -30,6 +30,7 @@ Not part of `make test` or `physics-bench all`: it takes about an hour.
 import argparse
 import ast
 import hashlib
+import itertools
 import json
 import os
 import shutil
@@ -263,10 +264,16 @@ def _cache_copy(warm, copy):
 
 
 def select(words):
-    if not words:
-        return list(MUTATIONS)
-    words = [w.lower() for w in words]
-    return [m for m in MUTATIONS if any(w in m.name.lower() or w == m.stage for w in words)]
+    """The mutations to run, taking the stages in turn (one of each stage, then
+    the next of each...), so a run stopped early has still covered every stage."""
+    chosen = list(MUTATIONS)
+    if words:
+        words = [w.lower() for w in words]
+        chosen = [m for m in chosen if any(w in m.name.lower() or w == m.stage for w in words)]
+    by_stage = {}
+    for m in chosen:
+        by_stage.setdefault(m.stage, []).append(m)
+    return [m for group in itertools.zip_longest(*by_stage.values()) for m in group if m is not None]
 
 
 def report(rows, baseline, out):
