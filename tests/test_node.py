@@ -9,7 +9,7 @@ import signal
 
 import numpy as np
 import pytest
-from test_node_support import FREE_DT_NS, FREE_SCENE, Driver, NodeProcess
+from test_node_support import DEADLINE_SCALE, FREE_DT_NS, FREE_SCENE, Driver, NodeProcess
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseArray, WrenchStamped
@@ -331,7 +331,7 @@ def test_the_printed_one_liner_pushes_the_ball(sim):
     assert "ros2 topic pub --once /physics/ball/impulse" in log
     one_liner = next(line.strip() for line in log.splitlines() if '-c "import rclpy' in line)
     # the one-liner returns once the node has acknowledged its impulse
-    subprocess.run(one_liner, shell=True, cwd=REPO, env=node_env(), check=True, timeout=30)
+    subprocess.run(one_liner, shell=True, cwd=REPO, env=node_env(), check=True, timeout=30 * DEADLINE_SCALE)
     step(driver, 1)
     odom = latest(driver, "/physics/ball/odom", FREE_DT_NS)
     assert state_from_odometry(odom)[2] == pytest.approx([2.0 / BALL_MASS, 0, 3.0 / BALL_MASS], abs=1e-12)

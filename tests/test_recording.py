@@ -11,7 +11,7 @@ import pytest
 from mcap.exceptions import McapError
 from mcap.reader import make_reader
 from mcap.writer import Writer
-from test_node_support import FREE_SCENE, Driver, NodeProcess, run_cli
+from test_node_support import DEADLINE_SCALE, FREE_SCENE, Driver, NodeProcess, run_cli
 
 from geometry_msgs.msg import PoseArray, WrenchStamped
 from nav_msgs.msg import Odometry
@@ -200,7 +200,7 @@ def test_kill_9_leaves_a_readable_recording(tmp_path):
     path = tmp_path / "cut.mcap"
     with NodeProcess(["--scene", scene, "--record", path, "--rtf", "0"], tmp_path, isolated=True) as node:
         node.wait_until_up()
-        deadline = time.monotonic() + 10.0
+        deadline = time.monotonic() + 10.0 * DEADLINE_SCALE
         while Recording(path).chunk_count < 2 and time.monotonic() < deadline:
             time.sleep(0.2)
         node.signal(signal.SIGKILL)
@@ -239,7 +239,7 @@ def test_sigint_finishes_the_file_and_ros_args_set_parameters(tmp_path):
     with NodeProcess(args, tmp_path, isolated=True) as node:
         node.wait_until_up()
         # wait for what is asserted below (enough clock ticks on disk), not for a time
-        deadline = time.monotonic() + 30.0
+        deadline = time.monotonic() + 30.0 * DEADLINE_SCALE
         while _count(path, "/clock") <= 8 and time.monotonic() < deadline:
             time.sleep(0.1)
         node.signal(signal.SIGINT)
