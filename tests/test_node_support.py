@@ -214,11 +214,17 @@ class Driver:
 
     # -- services -------------------------------------------------------------
     def call(self, srv_type, name, timeout=10.0, request=None):
+        future = self.send_request(srv_type, name, timeout, request)
+        self.spin_until(future.done, timeout, f"reply from {name}")
+        return future.result()
+
+    def send_request(self, srv_type, name, timeout=10.0, request=None):
+        """Send a request once the service is there; returns the reply's future.
+        For a request that makes the node exit at once (unpausing a run with a
+        --duration), whose reply may leave with the process: wait on the exit."""
         client = self._clients.get(name)
         if client is None:
             client = self.node.create_client(srv_type, name)
             self._clients[name] = client
         self.spin_until(client.service_is_ready, timeout, f"service {name}")
-        future = client.call_async(request if request is not None else srv_type.Request())
-        self.spin_until(future.done, timeout, f"reply from {name}")
-        return future.result()
+        return client.call_async(request if request is not None else srv_type.Request())

@@ -71,7 +71,9 @@ def session(tmp_path_factory):
         driver.call(Empty, "/reset_simulation")
         driver.publish_acked(kick, wrench_stamped((0.5, 0, 0), frame_id="ball"))
         driver.publish_acked(thrust, wrench_stamped((0, 2.0, 0), frame_id="box"))
-        driver.call(Empty, "/unpause_physics")
+        # it runs to --duration and exits at once: its reply can go with the
+        # process (it did, on a loaded machine), so wait on the exit instead
+        driver.send_request(Empty, "/unpause_physics")
         assert node.wait(30.0) == 0, node.log()
     return path, scene
 
