@@ -220,7 +220,8 @@ def pytest_run(copy, tests, timeout, label, cache=None):
         proc = subprocess.run(cmd, cwd=copy, env=env, capture_output=True, text=True, timeout=timeout)
         code, output = proc.returncode, proc.stdout + proc.stderr
     except subprocess.TimeoutExpired as e:
-        code, output = None, (e.stdout or b"").decode(errors="replace") if isinstance(e.stdout, bytes) else (e.stdout or "")
+        out = e.stdout or ""  # bytes even with text=True
+        code, output = None, out.decode(errors="replace") if isinstance(out, bytes) else out
     finally:
         shutil.rmtree(cache, ignore_errors=True)
     seconds = perf_counter() - t0
@@ -295,6 +296,14 @@ def report(rows, baseline, out):
     return caught
 
 
+def _baseline(copy, chosen, timeout, warm):
+    """Every test file the mutations name, on the unchanged copy: they must pass."""
+    tests = sorted({t for m in chosen for t in m.tests})
+    status, seconds, tail = pytest_run(copy, tests, timeout * 3, "unchanged source",
+                                       None if warm is None else _cache_copy(warm, copy))
+    return {"status": "pass" if status == SURVIVED else status, "seconds": seconds, "tail": tail}
+
+
 def run(only=None, out=DEFAULT_OUT, timeout=900.0, baseline=True, cold=False, recheck=False):
     chosen = select(only)
     bad = [(m.name, check(m)) for m in chosen if check(m)]
@@ -306,12 +315,9 @@ def run(only=None, out=DEFAULT_OUT, timeout=900.0, baseline=True, cold=False, re
         # a snapshot: the checkout's own folder goes when its source changes
         base, warm = None, (None if cold else _cache_copy(warm_cache(), copy))
         if baseline:
-            tests = sorted({t for m in chosen for t in m.tests})
-            status, seconds, tail = pytest_run(copy, tests, timeout * 3, "unchanged source",
-                                               None if cold else _cache_copy(warm, copy))
-            base = {"status": "pass" if status == SURVIVED else status, "seconds": seconds, "tail": tail}
-            if status != SURVIVED:
-                sys.stderr.write(f"[mutations] the unchanged tests do not pass:\n{tail}\n")
+            base = _baseline(copy, chosen, timeout, warm)
+            if base["status"] != "pass":
+                sys.stderr.write(f"[mutations] the unchanged tests do not pass:\n{base['tail']}\n")
                 report([], base, ensure(out))
                 return 2
         rows = []
