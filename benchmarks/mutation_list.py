@@ -145,11 +145,11 @@ MUTATIONS = (
     Mutation("position correction pushes out the slop too", "correct", C + "push_out.py",
              "target[c] = max(min(rate * (-sep[c] - slop) / h, max_speed), 0.0)",
              "target[c] = max(min(rate * (-sep[c]) / h, max_speed), 0.0)",
-             (T + "test_collisions_sleep.py", T + "test_contact_hard_cases.py")),
+             (T + "test_position_correction.py", T + "test_collisions_sleep.py")),
     Mutation("pseudo-velocity applied twice", "correct", C + "push_out.py",
              "pos[i, j] += (dV[i, j] + X[i, j]) * h if X.shape[0] else dV[i, j] * h",
              "pos[i, j] += (dV[i, j] + 2.0 * X[i, j]) * h if X.shape[0] else dV[i, j] * h",
-             (T + "test_contact_hard_cases.py", T + "test_collisions_sleep.py")),
+             (T + "test_position_correction.py", T + "test_contact_hard_cases.py")),
     # ---- ccd -------------------------------------------------------------------------
     Mutation("ccd threshold eight times too high", "ccd", C + "time_of_impact.py",
              "> threshold * smallest_half_size(kind, dims, i)", "> 8.0 * threshold * smallest_half_size(kind, dims, i)",
