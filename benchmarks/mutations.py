@@ -285,7 +285,8 @@ def report(rows, baseline, out):
              "| stage | mutation | file | tests run | result | s |", "|---|---|---|---|---|---|"]
     for r in rows:
         tests = ", ".join(os.path.basename(t) for t in r["tests"])
-        lines.append(f"| {r['stage']} | {r['name']} | {os.path.basename(r['path'])} | {tests} | "
+        name = r["name"].replace("|", "\\|")  # a table cell
+        lines.append(f"| {r['stage']} | {name} | {os.path.basename(r['path'])} | {tests} | "
                      f"{r['status']} | {r['seconds']:.0f} |")
     lines += ["", "Rerun: `physics-bench mutations` (all, about an hour on two cores) or "
               "`physics-bench mutations --only WORD` (mutations whose name has WORD, or a stage)."]
