@@ -80,7 +80,8 @@ def run(quick=False, out=None, engines=ce.ENGINES):
     start = perf_counter()
     for row in rows:
         rd = {"key": row.key, "title": row.title, "closed_form": row.closed_form,
-              "formula": row.formula, "course": row.course, "unit": row.unit, "engines": {}}
+              "formula": row.formula, "course": row.course, "unit": row.unit,
+              "peer_mu": row.spec.peer_mu, "engines": {}}
         for engine in engines:
             t0 = perf_counter()
             value, settings, status = measure(engine, row)
@@ -113,18 +114,19 @@ def _cell(row, engine):
 
 def table(data):
     engines = data["engines"]
-    head = ["row", "closed form (COURSE.md)", "exact"]
+    head = ["row", "closed form (COURSE.md §)", "exact", "peers' μ"]
     for e in engines:
         head += [ce.TITLES[e], "error"]
     head.append("closest")
     body = []
     for r in data["rows"]:
-        cells = [r["title"], f"{r['formula']} (§{r['course']})", f"{r['closed_form']:.4g} {r['unit']}"]
+        cells = [r["title"], f"{r['formula']} (§{r['course']})", f"{r['closed_form']:.4g} {r['unit']}",
+                 f"{r['peer_mu']:g}"]
         for e in engines:
             cells += _cell(r, e)
         cells.append(", ".join(ce.TITLES[e] for e in r["closest"]) or "—")
         body.append(cells)
-    return md.table(head, body, align="lll" + "rr" * len(engines) + "l")
+    return md.table(head, body, align="lllr" + "rr" * len(engines) + "l")
 
 
 def readings(data):

@@ -83,9 +83,9 @@ def _pybullet(spec):
         for _ in range(n):
             p.stepSimulation(physicsClientId=c)
     settings = (f"defaults: {e['numSolverIterations']} solver iterations, split impulse "
-                f"{'on' if e.get('useSplitImpulse') else 'off'}, ERP {e.get('erp', float('nan')):g}, "
-                f"cone friction {'on' if e.get('enableConeFriction') else 'off'}; set: one μ = "
-                f"{spec.peer_mu} (the row's), restitution = C_R, rolling and spinning friction 0, "
+                f"{'on' if e.get('useSplitImpulse') else 'off'}, "
+                f"cone friction {'on' if e.get('enableConeFriction') else 'off'}; set: one μ (the row's, "
+                "below), restitution = C_R (times the ground's 1), rolling and spinning friction 0, "
                 "linear and angular damping 0 (default 0.04), sleeping off")
     return Reader(step,
                   lambda i: np.array(p.getBasePositionAndOrientation(ids[i], physicsClientId=c)[0]),
@@ -137,7 +137,7 @@ def _mujoco(spec):
               if spec.bouncy else "")
     settings = (f"defaults: {solver} solver, {model.opt.iterations} iterations, {cone} cone, "
                 f"solref (0.02 s, 1), solimp default; set: condim 3 (no rolling or torsional "
-                f"friction), one μ = {spec.peer_mu} (the row's){bounce}")
+                f"friction), one μ (the row's, below){bounce}")
 
     def step(n):
         for _ in range(n):
