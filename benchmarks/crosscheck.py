@@ -29,11 +29,18 @@ from .results_io import machine, write_json, write_text
 # Why an engine differs from the closed form where the cause is a property of its model
 # (not of this run's numbers); quoted under the table.
 MODEL_NOTES = {
-    "slide": "PyBullet and MuJoCo are given μ = μ_k, so only their sliding friction is tested.",
+    "slide": "PyBullet and MuJoCo are given μ = μ_k, so only their sliding friction is tested. "
+             "A semi-implicit step stops v0 dt / 2 = 6 mm short of the continuous distance in every "
+             "engine; this engine's first step, where the box settles onto the floor, also takes "
+             "1.5 μ_k g dt off the speed instead of 1 (another 6 mm).",
     "bounce": "MuJoCo has no coefficient of restitution: C_R is mapped to the damping ratio of its "
-              "contact spring (crosscheck_engines.mujoco_dampratio), which holds for a linear "
-              "spring–damper only; its contact is stiffened by solimp and integrated at dt.",
-    "roll": "MuJoCo at condim 3 (condim 6 would add rolling friction, which the closed form has not).",
+              f"contact spring, ζ = {ce.mujoco_dampratio(cs.C_R):.4f} (a linear spring–damper's e = "
+              "exp(−ζπ/√(1−ζ²))), with solref timeconst "
+              f"{ce.mujoco_timeconst(cs.C_R):.3g} s so that the step resolves the spring (with its "
+              "default 0.02 s the apex was 0.42 m). PyBullet's bounce comes out 6 % high.",
+    "roll": "MuJoCo at condim 3 (condim 6 would add rolling friction, which the closed form has not). "
+            "PyBullet's one sphere–plane point with a hard constraint lands on 5/7 to rounding; this "
+            "engine and MuJoCo end 0.05 % low.",
     "incline_hold": "PyBullet and MuJoCo have one μ; here it is μ_s, so their hold is the same "
                     "Coulomb test as the course's. MuJoCo's contacts are soft: friction holds by "
                     "a regularised force, which creeps.",
@@ -41,7 +48,8 @@ MODEL_NOTES = {
                      "at μ_s and slide at μ_k in one scene; this engine does).",
     "stack": "MuJoCo's soft contacts settle into each other under load (a spring of its "
              "solref per contact), which adds up over the 19 contacts below the top.",
-    "mass_ratio": "",
+    "mass_ratio": "A sink of the cube's full height, 0.2 m, is the light cube squeezed out from under the "
+                  "heavy one; MuJoCo's soft contact is compressed by the 1,000 kg load instead.",
 }
 
 
