@@ -32,7 +32,8 @@ MODEL_NOTES = {
     "slide": "PyBullet and MuJoCo are given μ = μ_k, so only their sliding friction is tested. "
              "A semi-implicit step stops v0 dt / 2 = 6 mm short of the continuous distance in every "
              "engine; this engine's first step, where the box settles onto the floor, also takes "
-             "1.5 μ_k g dt off the speed instead of 1 (another 6 mm).",
+             "1.5 μ_k g dt off the speed instead of 1 (measured; every later step takes exactly μ_k g dt), "
+             "another 6 mm: a defect of the step that creates the contact, not of the friction law.",
     "bounce": "MuJoCo has no coefficient of restitution: C_R is mapped to the damping ratio of its "
               f"contact spring, ζ = {ce.mujoco_dampratio(cs.C_R):.4f} (a linear spring–damper's e = "
               "exp(−ζπ/√(1−ζ²))), with solref timeconst "
