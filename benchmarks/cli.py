@@ -5,6 +5,7 @@
     physics-bench scale     [--quick] [--out DIR]   piles and pyramid beside PyBullet and MuJoCo
     physics-bench effects   [--quick] [--out DIR]   per-effect cost table
     physics-bench node      [--quick] [--out DIR]   ROS 2 node in real time: step, publish, recording cost
+    physics-bench crosscheck [--quick] [--out DIR]  closed-form scenes beside PyBullet and MuJoCo
     physics-bench all       [--quick] [--out DIR]   all of the above
     physics-bench hostile   [--quick] [--out DIR]   floods against a node: received, counted, memory, /clock
                                                     (not part of `all`)
@@ -24,7 +25,7 @@ from time import perf_counter
 
 from .results_io import DEFAULT_OUT, ensure
 
-STUDIES = ("accuracy", "stability", "scale", "effects", "node")
+STUDIES = ("accuracy", "stability", "scale", "effects", "node", "crosscheck")
 
 
 def _run_accuracy(args):
@@ -63,8 +64,14 @@ def _run_hostile(args):
     hostile_flood.run(quick=args.quick, out=args.out)
 
 
+def _run_crosscheck(args):
+    from . import crosscheck
+    crosscheck.run(quick=args.quick, out=args.out)
+
+
 RUNNERS = {"accuracy": _run_accuracy, "stability": _run_stability,
-           "scale": _run_scale, "effects": _run_effects, "node": _run_node, "hostile": _run_hostile}
+           "scale": _run_scale, "effects": _run_effects, "node": _run_node, "hostile": _run_hostile,
+           "crosscheck": _run_crosscheck}
 
 
 def parser():
@@ -77,6 +84,7 @@ def parser():
              "scale": "box pyramid and sphere piles beside PyBullet and MuJoCo",
              "effects": "cost of each declared effect",
              "node": "the ROS 2 node in real time: step, publish and recording cost per step",
+             "crosscheck": "closed-form contact scenes in this engine, PyBullet and MuJoCo",
              "all": "every study, then the summary",
              "hostile": "floods against a running node: what reaches it, what it counts, memory, /clock"}
     sub.add_parser("mutations", add_help=False,

@@ -57,7 +57,8 @@ def build(out, prefix="", level=2):
         parts.append(short)
     for title, fn in (("Accuracy of the integrators", _accuracy), ("Contacts", _contacts),
                       ("Stability", _stability), ("Scale", _scale), ("Cost of each effect", _effects),
-                      ("The ROS 2 node in real time", _node)):
+                      ("The ROS 2 node in real time", _node),
+                      ("Cross-check against PyBullet and MuJoCo", _crosscheck)):
         parts.append(f"{h} {title}\n")
         parts.append(fn(out, prefix, level + 1))
     others = _other_tables(out)
@@ -68,7 +69,7 @@ def build(out, prefix="", level=2):
 
 
 OWN_TABLES = {"accuracy.md", "contacts.md", "stability.md", "scale.md", "effects.md",
-              "node_realtime.md", "README_results.md"}
+              "node_realtime.md", "crosscheck.md", "README_results.md"}
 
 
 def _other_tables(out):
@@ -76,6 +77,23 @@ def _other_tables(out):
     if not os.path.isdir(out):
         return []
     return sorted(f for f in os.listdir(out) if f.endswith(".md") and f not in OWN_TABLES)
+
+
+def _crosscheck(out, prefix, level):
+    from .crosscheck import readings, table
+    data = read_json(out, "crosscheck.json")
+    if not data:
+        return "_Not run yet: `physics-bench crosscheck`._\n"
+    wins = sum("physics_core" in r["closest"] for r in data["rows"])
+    return "\n".join([
+        f"`physics-bench crosscheck{' --quick' if data['quick'] else ''}` ({data['seconds']:.0f} s; "
+        f"settings and model notes in [crosscheck.md]({prefix}crosscheck.md)): the course's closed "
+        "forms on the same scenes in the three engines, same start, dt = 1/240 s, each engine at its "
+        "default solver settings, every body awake. PyBullet and MuJoCo have one friction "
+        "coefficient; each row gives them the one its closed form uses (peers' μ). This engine is "
+        f"closest on {wins} of {len(data['rows'])} rows."
+        + (f" Not installed: {', '.join(data['missing'])}." if data["missing"] else "") + "\n",
+        table(data), readings(data)])
 
 
 # ---- accuracy -------------------------------------------------------------------
