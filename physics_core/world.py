@@ -231,9 +231,10 @@ class World(CommandsMixin, ReadingMixin):
 
     def reset(self):
         """Back to the scene's own bodies and initial state at time 0 (commands cleared)."""
+        # The state first: _build sizes its arrays by the state's bodies.
+        self.state = State.from_initial(self.scene_model.initial)
         if self.model is not self.scene_model:
             self._build(self.scene_model)
-        self.state = State.from_initial(self.model.initial)
         self.contacts = ContactEvents.empty()
         if self.contact_system is not None:
             self.contact_system.reset()

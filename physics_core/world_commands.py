@@ -7,6 +7,7 @@ import numpy as np
 from . import quaternion as qt
 from .command_limits import (MAX_ANGULAR_IMPULSE, MAX_FORCE, MAX_IMPULSE, MAX_POINT_DISTANCE,
                              MAX_TORQUE, magnitude)
+from . import shapes
 from .errors import CommandError
 from .vec3 import cross
 
@@ -89,6 +90,13 @@ class CommandsMixin:
         self.state.has_pending_impulse = True
         self.wake(i)
 
+    def clear_loads(self):
+        """Let go of every held force and torque and drop pending impulses."""
+        s = self.state
+        for a in (s.user_force, s.user_force_offset, s.user_torque, s.impulse, s.angular_impulse):
+            a[:] = 0.0
+        s.has_user_force = s.has_user_torque = s.has_pending_impulse = False
+
     def _apply_impulses(self):
         """Δv = J/m, ΔL = r × J + angular impulse (COURSE.md 3, angular impulse)."""
         s = self.state
@@ -99,3 +107,50 @@ class CommandsMixin:
         s.impulse[:] = 0.0
         s.angular_impulse[:] = 0.0
         s.has_pending_impulse = False
+
+    def set_body_state(self, name, position=None, orientation=None, velocity=None, angular_velocity=None):
+        """Teleport a body between steps: any of its position (m), orientation
+        (unit quaternion w, x, y, z, body → world), velocity (m/s) and angular
+        velocity (rad/s, world frame); None keeps that part. A static body
+        takes a new pose but no motion (a plane keeps its pose: its normal and
+        offset). Held loads stay; the body is woken. Everything is checked
+        before anything is written (CommandError)."""
+        i = self.model.index.get(name)
+        if i is None:
+            raise CommandError(f"unknown body {name!r}; bodies are: {', '.join(self.model.names)}")
+        new = self._checked_body_state(i, name, position, orientation, velocity, angular_velocity)
+        s = self.state
+        for key, value in new.items():
+            getattr(s, key)[i] = value
+        if not self.model.is_static[i]:
+            self.wake(i)
+
+    def _checked_body_state(self, i, name, position, orientation, velocity, angular_velocity):
+        new = {}
+        for key, value in (("pos", position), ("vel", velocity), ("omega", angular_velocity)):
+            if value is not None:
+                new[key] = self._vec(value, f"{key} of {name!r}")
+        if orientation is not None:
+            new["quat"] = _unit_quaternion(orientation, name)
+        if not self.model.is_static[i]:
+            return new
+        if np.any(new.get("vel", 0.0)) or np.any(new.get("omega", 0.0)):
+            raise CommandError(f"body {name!r} is static: it takes a pose but no velocity")
+        if self.model.shape_type[i] == shapes.PLANE and ("pos" in new or "quat" in new):
+            raise CommandError(f"body {name!r} is a plane: its normal and offset are its pose and are fixed")
+        return new
+
+
+# |q| may differ from 1 by this much and is then normalised (float32 senders)
+UNIT_QUATERNION_TOLERANCE = 1e-6
+
+
+def _unit_quaternion(value, name):
+    try:
+        q = np.array(value, dtype=float).reshape(4)
+    except (TypeError, ValueError):
+        raise CommandError(f"orientation of {name!r}: expected 4 numbers (w, x, y, z), got {value!r}") from None
+    norm = float(np.sqrt(q @ q)) if np.all(np.isfinite(q)) else float("nan")
+    if not abs(norm - 1.0) <= UNIT_QUATERNION_TOLERANCE:
+        raise CommandError(f"orientation of {name!r}: expected a unit quaternion, got {q.tolist()} (|q| = {norm:.9g})")
+    return q if norm == 1.0 else q / norm

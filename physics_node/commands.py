@@ -161,6 +161,11 @@ class CommandApplier:
         self._body_axes.clear()
         self._held_since.clear()
 
+    def forget_body(self, name):
+        """Drop what is held for a body that left the world."""
+        self._body_axes.pop(name, None)
+        self._held_since.pop(name, None)
+
     def _to_world(self, name, force, torque):
         q = self.world.state.quat[self.world.model.index[name]]
         return rotate_to_world(q, force), rotate_to_world(q, torque)

@@ -111,6 +111,12 @@ class FoxgloveBridge:
         self.tap = OutputTap(recorder, self, prefix + "/poses")
         return self.tap
 
+    def bodies_changed(self, model):
+        """Bodies were spawned or deleted: the scene draws the new body list."""
+        from .foxglove_scene import SceneMessages
+
+        self.scene = SceneMessages(model)
+
     @property
     def url(self):
         return f"ws://{self.host}:{self.server.port}" if self.server is not None else ""

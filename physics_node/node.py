@@ -44,6 +44,8 @@ from .parameters import ParameterValueError, coerce, declare
 from .qos import COMMANDS, SERVICES, per_body_events
 from .recorder import INTEGRATION_METADATA, SCENE_MEDIA_TYPE, SESSION_METADATA, Recorder, chunk_size_for
 from .session import engine_version, integration_metadata, session_metadata
+from .sim_actions import SimulateStepsServer
+from .sim_services import SimServices
 from .stepping import Stepper
 from .unknown_bodies import UnknownBodyTopics
 
@@ -109,24 +111,16 @@ class PhysicsNode(Node):
             self._start_recording()
 
         self._command_topics = {}
-        _, command_events = per_body_events()
-        for name in self.model.names:
-            for kind in (WRENCH, IMPULSE):
-                sub = self.create_subscription(
-                    WrenchStamped,
-                    f"~/{name}/{kind}",
-                    self._command_callback(name, kind),
-                    COMMANDS,
-                    raw=True,
-                    event_callbacks=command_events,
-                )
-                self._command_topics[(name, kind)] = sub.topic_name
+        self._command_subs = {}
+        self._subscribe_commands(self.model.names)
 
         self.create_service(Empty, "pause_physics", self._on_pause, qos_profile=SERVICES)
         self.create_service(Empty, "unpause_physics", self._on_unpause, qos_profile=SERVICES)
         self.create_service(Empty, "reset_simulation", self._on_reset, qos_profile=SERVICES)
         self.create_service(Empty, "reset_world", self._on_reset, qos_profile=SERVICES)
         self.create_service(Trigger, "~/step", self._on_step, qos_profile=SERVICES)
+        self.sim = SimServices(self)  # the simulation_interfaces standard
+        self.sim_actions = SimulateStepsServer(self, self.sim)
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
 
@@ -158,6 +152,9 @@ class PhysicsNode(Node):
 
     def close(self):
         """Finish the recording, if any, and stop serving Foxglove. Called on every exit path."""
+        if getattr(self, "sim_actions", None) is not None:
+            self.sim_actions.close()
+            self.sim_actions = None
         if self.recorder is not None:
             try:
                 stats = integration_metadata(self.world)
@@ -251,6 +248,43 @@ class PhysicsNode(Node):
         self.get_logger().warning(f"dropped a command on {excerpt(topic)}: {excerpt(detail)}{more}")
         self._last_warning[reason] = (now, 0)
 
+    def _subscribe_commands(self, names, paths=None):
+        _, command_events = per_body_events()
+        for name in names:
+            path = (paths or {}).get(name, name)
+            for kind in (WRENCH, IMPULSE):
+                sub = self.create_subscription(
+                    WrenchStamped,
+                    f"~/{path}/{kind}",
+                    self._command_callback(name, kind),
+                    COMMANDS,
+                    raw=True,
+                    event_callbacks=command_events,
+                )
+                self._command_topics[(name, kind)] = sub.topic_name
+                self._command_subs[(name, kind)] = sub
+
+    def bodies_changed(self, namespaces=None):
+        """Bodies were spawned or deleted (entities.py): topics, outputs and
+        the latched body list follow the world's new body list."""
+        paths = {n: f"{ns}/{n}" for n, ns in (namespaces or {}).items() if ns}
+        old = set(name for name, _ in self._command_subs)
+        self.model = self.world.model
+        self._drop_subscriptions(self._command_subs, lambda key: key[0] not in self.model.index)
+        self.unknown_bodies.bodies_changed(self.model.names)  # a spawned body is no longer unknown
+        self._subscribe_commands([n for n in self.model.names if n not in old], paths)
+        self.outputs.prefix = paths
+        self.outputs.bodies_changed(self.model)
+        if self.foxglove is not None:
+            self.foxglove.bodies_changed(self.model)
+        t = sim_time_ns(self.world.time)
+        self.outputs.send_bodies(self.world, t, self.world.step_index)
+
+    def _drop_subscriptions(self, subs, drop):
+        for key in [k for k in subs if drop(k)]:
+            self.destroy_subscription(subs.pop(key))
+            self._command_topics.pop(key, None)
+
     # -- services -------------------------------------------------------------
     def _on_pause(self, _request, response):
         self.set_parameters([Parameter("paused", Parameter.Type.BOOL, True)])
@@ -261,18 +295,12 @@ class PhysicsNode(Node):
         return response
 
     def _on_reset(self, _request, response):
-        discarded = len(self.stepper.reset())
+        discarded = len(self.sim.entities.reset(0))  # as ResetSimulation SCOPE_ALL: spawned bodies go too
         for _ in range(discarded):
             self.window.dropped(DISCARDED_ON_RESET)
-        self.outputs.refresh_subscribers()
-        t0 = sim_time_ns(self.world.time)
-        step = self.world.step_index
-        self.outputs.record_reset(t0, step)
-        self.outputs.send_clock(t0, step)
-        self.outputs.send_state(self.world, t0, step)
-        self.pacer.restart(time.monotonic())
-        self.finished = False
-        self.faulted = ""
+        self.sim.follow_bodies()
+        self.outputs.record_reset(sim_time_ns(self.world.time), self.world.step_index)
+        self.sim.after_reset(True)
         note = f"; {discarded} queued commands discarded" if discarded else ""
         self.get_logger().info(f"world reset to its initial state{note}")
         return response

@@ -14,7 +14,8 @@ from rclpy.serialization import serialize_message
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import String
-from visualization_msgs.msg import MarkerArray
+from tf2_msgs.msg import TFMessage
+from visualization_msgs.msg import Marker, MarkerArray
 
 from msg_adapters import BodyOdometry, SceneMarkers, body_markers, contact_cloud, pose_array, time_msg
 from msg_adapters.cdr import (
@@ -26,9 +27,10 @@ from msg_adapters.cdr import (
     clock_cdr,
 )
 
-from .qos import COMMANDS, LATCHED, STREAM, per_body_events
 from .limits import excerpt
+from .qos import COMMANDS, LATCHED, STREAM, TF, TF_STATIC, per_body_events
 from .recorder import EVENTS_SUFFIX, ISOLATE_EVENT, RESET_EVENT, RecorderError
+from .tf_output import TfOutput
 
 
 class Outputs:
@@ -44,11 +46,13 @@ class Outputs:
         self.markers = pub(MarkerArray, "~/markers", STREAM)
         self.bodies = pub(MarkerArray, "~/bodies", LATCHED)
         self.diagnostics = pub(DiagnosticArray, "/diagnostics", STREAM)
-        odom_events, _ = per_body_events()
-        self.odom = [pub(Odometry, f"~/{name}/odom", STREAM, event_callbacks=odom_events) for name in model.names]
-        self._qos = {p.topic_name: q for p, q in self._all_publishers()}
-        self._topic = {p: p.topic_name for p, _ in self._all_publishers()}
+        self.tf = TfOutput(pub(TFMessage, "/tf", TF), pub(TFMessage, "/tf_static", TF_STATIC), model)
+        self.prefix = {}  # body -> its topics' path under the node when not its name (an entity namespace)
+        self.odom = [self._odom_publisher(name) for name in model.names]
+        self._qos, self._topic = {}, {}
+        self._index_publishers()
         self._channels = {}  # publisher -> recording channel id, made on its first message
+        self._bodies_sent, self._body_ns = 0, {}  # markers in the last ~/bodies, and their ns
         self.events_topic = node.get_fully_qualified_name() + EVENTS_SUFFIX
         self._build = _state_builder(model, node.get_logger())
         # On-demand outputs (see refresh_subscribers): which bodies' odometry
@@ -58,6 +62,33 @@ class Outputs:
         self._odom_rows = []
         self._markers_on = False
         self._poll_at = 0
+        self.refresh_subscribers()
+
+    def _odom_publisher(self, name):
+        odom_events, _ = per_body_events()
+        path = self.prefix.get(name, name)
+        return self._node.create_publisher(Odometry, f"~/{path}/odom", STREAM, event_callbacks=odom_events)
+
+    def _index_publishers(self):
+        self._qos.update({p.topic_name: q for p, q in self._all_publishers()})
+        self._topic.update({p: p.topic_name for p, _ in self._all_publishers()})
+
+    def bodies_changed(self, model):
+        """Bodies were spawned or deleted: each body keeps its odometry
+        publisher, a new one gets one, a deleted one's is destroyed; the
+        per-step builders are made for the new body list."""
+        by_name = dict(zip(self.model.names, self.odom))
+        for name in set(by_name) - set(model.names):
+            publisher = by_name.pop(name)
+            self._topic.pop(publisher, None)
+            self._channels.pop(publisher, None)
+            self._node.destroy_publisher(publisher)
+        self.model = model
+        self.odom = [by_name.get(name) or self._odom_publisher(name) for name in model.names]
+        self._index_publishers()
+        self._build = _state_builder(model, self._node.get_logger())
+        self.tf.bodies_changed(model)
+        self._odom_read = [False] * len(self.odom)
         self.refresh_subscribers()
 
     def refresh_subscribers(self):
@@ -91,8 +122,8 @@ class Outputs:
 
     @property
     def state_messages(self):
-        """Messages `send_state` sends now: poses, contacts, odometry, markers."""
-        return 2 + len(self._odom_rows) + int(self._markers_on)
+        """Messages `send_state` sends now: poses, contacts, odometry, markers, /tf."""
+        return 2 + len(self._odom_rows) + int(self._markers_on) + int(self.tf.has_dynamic)
 
     def set_odometry(self, mode):
         self.odometry = mode
@@ -101,6 +132,8 @@ class Outputs:
     def _all_publishers(self):
         yield self.clock, LATCHED
         yield self.bodies, LATCHED
+        yield self.tf.static, TF_STATIC
+        yield self.tf.dynamic, TF
         for p in (self.poses, self.contacts, self.markers, self.diagnostics, *self.odom):
             yield p, STREAM
 
@@ -152,6 +185,9 @@ class Outputs:
         publishers += [self.odom[i] for i in rows]
         if markers:
             publishers.append(self.markers)
+        if self.tf.has_dynamic:
+            publishers.append(self.tf.dynamic)
+            datas.append(self.tf.build(world.state, time_ns))
         for publisher, data in zip(publishers, datas):
             publisher.publish(data)
         if self.recorder is not None:
@@ -173,8 +209,25 @@ class Outputs:
         return cid
 
     def send_bodies(self, world, time_ns, step):
+        """The latched body list (~/bodies: one marker per body, id = its row
+        in ~/poses, ns and text = its name; after a delete, DELETE markers
+        for the ids no longer used, so a viewer drops them) and the static
+        bodies' /tf_static."""
         msg = body_markers(self.model, world.state.pos, world.state.quat, time_ns)
+        n = len(self.model.names)
+        for gone in range(n, self._bodies_sent):
+            marker = Marker(action=Marker.DELETE, id=gone, ns=self._body_ns.get(gone, ""))
+            marker.header.stamp = time_msg(time_ns)
+            msg.markers.append(marker)
+        self._bodies_sent = n
+        self._body_ns = dict(enumerate(self.model.names))
         self._send(self.bodies, msg, time_ns, step)
+        self._send_cdr(self.tf.static, TFMessage, self.tf.build_static(world.state, time_ns), time_ns, step)
+
+    def record_request(self, topic, msg, time_ns, step):
+        """A simulator-standard request as received, for --resimulate."""
+        if self.recorder is not None:
+            self._record(self.recorder.write, topic, type(msg), serialize_message(msg), time_ns, step, COMMANDS)
 
     def send_diagnostics(self, msg, time_ns, step):
         self._send(self.diagnostics, msg, time_ns, step)

@@ -20,6 +20,14 @@ LATCHED = QoSProfile(
     reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.TRANSIENT_LOCAL,
 )
+# /tf and /tf_static as tf2_ros offers them (reliable, depth 100 / latched).
+TF = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST,
+    depth=100,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+)
+TF_STATIC = LATCHED
 # Services: a reliable request queue deep enough for a burst of calls
 # (limits.SERVICE_QUEUE_DEPTH); rclpy's default of 10 loses the 11th request
 # of a burst without answering it.

@@ -24,6 +24,7 @@ from physics_core.scene_limits import MAX_BODIES
 
 from .commands import Command
 from .recorder import EVENTS_SUFFIX, ISOLATE_EVENT, RESET_EVENT, SCENE_MEDIA_TYPE, SESSION_METADATA
+from .resimulate_requests import ReplayedRequests
 from .recording_reader import Recording
 from .stepping import Stepper
 
@@ -53,6 +54,7 @@ class Result:
     last_step: int = 0
     commands: int = 0
     resets: int = 0
+    requests: int = 0  # simulator-standard requests re-applied (spawn, delete, set state, reset, ...)
     complete_file: bool = True
     divergence: Divergence = None
     error: str = ""
@@ -65,7 +67,8 @@ class Result:
         if self.status == MATCH:
             return (
                 f"match: all {self.compared} recorded pose sets up to step {self.last_step} are bit-identical "
-                f"to the recomputed ones ({self.commands} commands re-applied, {self.resets} resets){tail}"
+                f"to the recomputed ones ({self.commands} commands, {self.requests} simulator requests re-applied, "
+                f"{self.resets} resets){tail}"
             )
         d = self.divergence
         with np.printoptions(precision=17):
@@ -111,68 +114,96 @@ def _resimulate(recording):
     session = recording.metadata.get(SESSION_METADATA)
     if session is None or "node" not in session:
         raise ResimulationError(f"no {SESSION_METADATA!r} metadata: not a physics_node recording")
-    node = session["node"]
     # The body limit the node ran with (older recordings: the default).
     max_bodies = int(json.loads(session.get("param.max_bodies", str(MAX_BODIES))))
-    world = _load_world(recording, max_bodies)
-    stepper = Stepper(world, command_timeout=0.0, error_types=(CommandError, ValueError))
-    poses_topic = f"{node}/poses"
-    events_topic = node + EVENTS_SUFFIX
-    command_topic = re.compile(rf"^{re.escape(node)}/([^/]+)/(wrench|impulse)$")
-    result = Result(MATCH)
+    replay = _Replay(recording, session["node"], max_bodies)
+    for m in recording.messages():
+        if not replay.take(m):
+            break
+    result = replay.result
+    result.complete_file = recording.complete
+    if result.status == MATCH and result.compared == 0:
+        raise ResimulationError("no poses recorded on " + replay.poses_topic)
+    return result
 
-    def advance_to(step, what):
+
+class _Replay:
+    """The recorded messages of one session, taken in file order."""
+
+    def __init__(self, recording, node, max_bodies=MAX_BODIES):
+        self.world = _load_world(recording, max_bodies)
+        self.stepper = Stepper(self.world, command_timeout=0.0, error_types=(CommandError, ValueError))
+        self.poses_topic = f"{node}/poses"
+        self.events_topic = node + EVENTS_SUFFIX
+        # a spawned body's topics may sit under its entity namespace: ~/<ns>/<body>/wrench
+        self.command_topic = re.compile(rf"^{re.escape(node)}/(?:.+/)?([^/]+)/(wrench|impulse)$")
+        self.requests = ReplayedRequests(self.stepper, node, recording.attachments, max_bodies)
+        self.result = Result(MATCH)
+
+    def take(self, m):
+        """Act on one message; False once the poses diverged."""
+        if m.topic == self.poses_topic:
+            return self._compare(m)
+        if m.topic == self.events_topic:
+            self._event(m)
+        elif self.requests.takes(m.topic):
+            self.advance_to(m.sequence, "request")
+            self.result.requests += self.requests.apply(m.topic, m.data)
+        else:
+            self._command(m)
+        return True
+
+    def _event(self, m):
+        event = deserialize_message(m.data, String).data
+        if event == RESET_EVENT:
+            self.requests.reset_all()
+            self.result.resets += 1
+        elif event.startswith(ISOLATE_EVENT + " "):
+            # Bodies the node froze when the step from m.sequence went
+            # non-finite: the re-run must have frozen the same ones.
+            self.advance_to(m.sequence + 1, "isolation event")
+            names = event[len(ISOLATE_EVENT) + 1 :].split(",")
+            missing = [n for n in names if n not in self.stepper.isolated]
+            if missing:
+                raise ResimulationError(f"the recording froze {', '.join(missing)} at step {m.sequence}; the re-run did not")
+            self.result.notes.append(f"froze {', '.join(names)} at step {m.sequence}, as recorded")
+
+    def _compare(self, m):
+        world, result = self.world, self.result
+        self.advance_to(m.sequence, "poses")
+        pos, quat = arrays_from_pose_array(deserialize_message(m.data, PoseArray))
+        result.compared += 1
+        result.last_step = m.sequence
+        if _same_bits(pos, world.state.pos) and _same_bits(quat, world.state.quat):
+            return True
+        result.status = DIVERGE
+        result.divergence = _first_difference(world, m, pos, quat)
+        return False
+
+    def _command(self, m):
+        match = self.command_topic.match(m.topic)
+        if not match:
+            return
+        self.advance_to(m.sequence, "command")
+        frame, force, torque = wrench_arrays(deserialize_message(m.data, WrenchStamped))
+        self.stepper.submit(Command(match.group(2), match.group(1), frame, force, torque, topic=m.topic, raw=m.data))
+        self.result.commands += 1
+
+    def advance_to(self, step, what):
+        world = self.world
         if world.step_index > step:
             raise ResimulationError(
                 f"{what} at step {step} comes after step {world.step_index} in the file; steps must not go back "
                 "without a reset event"
             )
         while world.step_index < step:
-            boundary = stepper.advance()
+            boundary = self.stepper.advance()
             if boundary.rejected:
                 command, error = boundary.rejected[0]
                 raise ResimulationError(f"recorded command on {command.topic} was refused on re-apply: {error}")
             if boundary.failure is not None:
                 raise ResimulationError(f"the engine failed at step {boundary.step}: {boundary.failure}")
-
-    for m in recording.messages():
-        if m.topic == poses_topic:
-            advance_to(m.sequence, "poses")
-            pos, quat = arrays_from_pose_array(deserialize_message(m.data, PoseArray))
-            result.compared += 1
-            result.last_step = m.sequence
-            if not (_same_bits(pos, world.state.pos) and _same_bits(quat, world.state.quat)):
-                result.status = DIVERGE
-                result.divergence = _first_difference(world, m, pos, quat)
-                break
-        elif m.topic == events_topic:
-            event = deserialize_message(m.data, String).data
-            if event == RESET_EVENT:
-                stepper.reset()
-                result.resets += 1
-            elif event.startswith(ISOLATE_EVENT + " "):
-                # Bodies the node froze when the step from m.sequence went
-                # non-finite: the re-run must have frozen the same ones.
-                advance_to(m.sequence + 1, "isolation event")
-                names = event[len(ISOLATE_EVENT) + 1 :].split(",")
-                missing = [n for n in names if n not in stepper.isolated]
-                if missing:
-                    raise ResimulationError(
-                        f"the recording froze {', '.join(missing)} at step {m.sequence}; the re-run did not"
-                    )
-                result.notes.append(f"froze {', '.join(names)} at step {m.sequence}, as recorded")
-        else:
-            match = command_topic.match(m.topic)
-            if not match:
-                continue
-            advance_to(m.sequence, "command")
-            frame, force, torque = wrench_arrays(deserialize_message(m.data, WrenchStamped))
-            stepper.submit(Command(match.group(2), match.group(1), frame, force, torque, topic=m.topic, raw=m.data))
-            result.commands += 1
-    result.complete_file = recording.complete
-    if result.status == MATCH and result.compared == 0:
-        raise ResimulationError("no poses recorded on " + poses_topic)
-    return result
+            self.requests.stepped()
 
 
 def _first_difference(world, message, pos, quat):

@@ -113,6 +113,15 @@ class Stepper:
                 boundary.failure = exc
                 return
 
+    def drop_commands(self):
+        """Forget queued and held commands (the world keeps its state).
+        Returns the queued commands dropped."""
+        dropped = list(self._queue)
+        self._queue.clear()
+        self._per_body.clear()
+        self.applier.forget()
+        return dropped
+
     def reset(self):
         """World back to its initial state; queued and held commands dropped.
         Returns the queued commands dropped."""

@@ -32,6 +32,13 @@ class UnknownBodyTopics:
         self._idle_since = {}  # topic -> monotonic time its publishers were last seen gone
         self.ignored = set()  # topics seen beyond the cap
 
+    def bodies_changed(self, names):
+        """Bodies were spawned or deleted: a spawned body's topics are its own now."""
+        self._names = names
+        for topic in [t for t in self.subscriptions if self._pattern.match(t).group(1) in names]:
+            self._node.destroy_subscription(self.subscriptions.pop(topic))
+            self._idle_since.pop(topic, None)
+
     def scan(self, now=None):
         """One graph scan: expire idle subscriptions, subscribe to new topics."""
         now = time.monotonic() if now is None else now

@@ -98,10 +98,13 @@ def test_rosbags_decodes_every_message(session):
         "/physics/ball/impulse": "geometry_msgs/msg/WrenchStamped",
         "/physics/box/wrench": "geometry_msgs/msg/WrenchStamped",
         "/physics/events": "std_msgs/msg/String",
+        "/tf": "tf2_msgs/msg/TFMessage",  # recorded like any output, and decoded by rosbags
+        "/tf_static": "tf2_msgs/msg/TFMessage",
     } | ({"/diagnostics": "diagnostic_msgs/msg/DiagnosticArray"} if "/diagnostics" in topics else {})
     steps = round(DURATION / 0.005)
     assert counts["/physics/ball/impulse"] == 2  # the NaN one was dropped
     assert counts["/physics/box/wrench"] == 2
+    assert counts["/tf"] == counts["/physics/poses"]  # every published step
     # Every step after the reset, plus the 5 manual ones, the start and the reset.
     assert counts["/clock"] == steps + 5 + 2
     with Reader(Path(path)) as reader:

@@ -291,3 +291,40 @@ def test_reset_returns_to_the_initial_state_and_replays_identically():
     first.apply_impulse("a", [0.1, 0.0, 0.0], point=[0.0, 0.05, 0.0])
     first.step(200)
     assert state_hash(first) == h
+
+
+def test_set_body_state_moves_a_static_box_and_a_ball_dropped_there_rests_on_it():
+    import warnings
+
+    scene = {"dt": 0.005, "gravity": "earth", "effects": {"contacts": {}}, "bodies": [
+        {"name": "ground", "shape": {"type": "plane", "normal": [0, 0, 1], "offset": 0.0}, "static": True},
+        {"name": "table", "shape": {"type": "box", "half_extents": [0.5, 0.5, 0.05]}, "static": True,
+         "position": [0, 0, 0.5]},
+        {"name": "ball", "shape": {"type": "sphere", "radius": 0.1}, "mass": 1.0, "position": [3, 0, 1.5]}]}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the fallback friction pair
+        world = load_scene(scene)
+    world.set_body_state("table", position=[3, 0, 0.5])
+    world.step(600)
+    # resting on the table top (z = 0.55) within the contact slop, not on the ground
+    assert abs(world.body("ball").position[2] - 0.65) < 0.01
+
+
+def test_set_body_state_refuses_what_it_cannot_do_and_changes_nothing():
+    world = load_scene({"dt": 0.01, "bodies": [
+        {"name": "ground", "shape": {"type": "plane"}, "static": True},
+        {"name": "ball", "shape": {"type": "sphere", "radius": 0.1}, "mass": 1.0}]})
+    before = world.body("ball").position
+    for kwargs, match in (
+        (dict(name="ball", position=[0, 0, 1], orientation=[2.0, 0, 0, 0]), "unit quaternion"),
+        (dict(name="ball", position=[0, 0, float("nan")]), "finite"),
+        (dict(name="ground", velocity=[1.0, 0, 0]), "static"),
+        (dict(name="ground", position=[0, 0, 1.0]), "plane"),
+        (dict(name="nobody", position=[0, 0, 1.0]), "unknown body"),
+    ):
+        with pytest.raises(CommandError, match=match):
+            world.set_body_state(**kwargs)
+    assert np.array_equal(world.body("ball").position, before)
+    world.set_body_state("ball", position=[1.0, 2.0, 3.0], velocity=[0, 0, 1.0])
+    assert world.body("ball").position.tolist() == [1.0, 2.0, 3.0]
+    assert world.body("ball").velocity.tolist() == [0.0, 0.0, 1.0]

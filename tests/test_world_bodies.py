@@ -104,6 +104,20 @@ def test_reset_returns_to_the_scene_bodies():
     assert state_hash(world) == state_hash(fresh)
 
 
+def test_reset_after_a_body_was_added_does_not_size_arrays_by_the_old_state():
+    """Regression: reset() rebuilt the step for the scene's bodies while the
+    state still held the added one ('operands could not be broadcast')."""
+    world = load_scene(pile_scene(sphere(position=(0, 0, 0.5))))
+    fresh = load_scene(pile_scene(sphere(position=(0, 0, 0.5))))
+    world.add_body(sphere("extra", position=(1, 0, 1)))
+    world.step(5)
+    world.reset()
+    assert world.model.names == ("ground", "ball")
+    world.step(50)
+    fresh.step(50)
+    assert state_hash(world) == state_hash(fresh)
+
+
 def test_arrays_grow_by_doubling_and_no_kernel_recompiles():
     """Adding 200 bodies one at a time reallocates the state's buffers O(log n) times,
     and the compiled contact kernels keep the signatures they had."""
