@@ -27,7 +27,7 @@ $(STAMP): setup.py package.xml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PIP) install -q --upgrade pip
 	$(PIP) install -q $(ROS_DEPS)
-	$(PIP) install -q -e '.[test,bench,render,foxglove]'
+	$(PIP) install -q -e '.[test,bench,render,foxglove,sweep]'
 	$(PY) -m physics_core.warm_up
 	touch $(STAMP)
 

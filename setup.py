@@ -8,7 +8,8 @@ setup(
     name=PACKAGE,
     version="0.1.0",
     packages=find_packages(
-        include=["physics_core*", "physics_node*", "physics_render*", "msg_adapters*", "benchmarks*"]
+        include=["physics_core*", "physics_node*", "physics_render*", "physics_sweep*", "msg_adapters*",
+                 "benchmarks*"]
     ),
     data_files=[
         ("share/ament_index/resource_index/packages", ["resource/" + PACKAGE]),
@@ -36,6 +37,8 @@ setup(
         # physics-node --foxglove: the Foxglove WebSocket server (tests talk to it with websockets + protobuf).
         "foxglove": ["foxglove-sdk>=0.30"],
         "compare": ["pybullet", "mujoco"],
+        # physics-sweep: Ray fans runs out (about 240 MB installed), pyarrow writes Parquet (about 170 MB)
+        "sweep": ["ray>=2.9", "pyarrow>=14"],
     },
     zip_safe=True,
     maintainer="physics_node maintainers",
@@ -48,6 +51,7 @@ setup(
             "physics-replay = physics_node.replay:main",
             "physics-bench = benchmarks.cli:main",
             "physics-render = physics_render.cli:main",
+            "physics-sweep = physics_sweep.cli:main",
         ],
     },
 )
