@@ -59,8 +59,13 @@ def cluster_cpus():
 
 
 def _run_batch(plan, runs):
+    import ray
     from .runs import execute
-    return [execute(plan, r) for r in runs]
+    node = ray.get_runtime_context().get_node_id()[:8]
+    rows = [execute(plan, r) for r in runs]
+    for row in rows:
+        row["worker"] = f"{node}/{row['worker']}"     # Ray node, then host:pid
+    return rows
 
 
 class BatchSizer:
