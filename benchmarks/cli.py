@@ -12,6 +12,7 @@
     physics-bench mutations [--only WORD ...] [--list] [--cold]
                                                     plant physics bugs one at a time; are they caught?
                                                     (hours on 2 shared cores; not part of `all`)
+    physics-bench sweep     [--quick] [--out DIR]   physics-sweep on Ray: runs/s on 1, 2, all cores (not in all)
 
 Each writes Markdown tables (`*.md`), plots (`*.png`) and raw data (`*.json`)
 into DIR (default benchmarks/results) and refreshes DIR/README_results.md;
@@ -69,9 +70,19 @@ def _run_crosscheck(args):
     crosscheck.run(quick=args.quick, out=args.out)
 
 
+def _run_sweep(args):
+    try:
+        import ray  # noqa: F401
+    except ImportError as e:
+        sys.stderr.write(f"[sweep] skipped: ray is not installed ({e}); pip install -e '.[sweep]'\n")
+        return
+    from . import sweep_scaling
+    sweep_scaling.run(quick=args.quick, out=args.out)
+
+
 RUNNERS = {"accuracy": _run_accuracy, "stability": _run_stability,
            "scale": _run_scale, "effects": _run_effects, "node": _run_node, "hostile": _run_hostile,
-           "crosscheck": _run_crosscheck}
+           "crosscheck": _run_crosscheck, "sweep": _run_sweep}
 
 
 def parser():
@@ -86,11 +97,12 @@ def parser():
              "node": "the ROS 2 node in real time: step, publish and recording cost per step",
              "crosscheck": "closed-form contact scenes in this engine, PyBullet and MuJoCo",
              "all": "every study, then the summary",
-             "hostile": "floods against a running node: what reaches it, what it counts, memory, /clock"}
+             "hostile": "floods against a running node: what reaches it, what it counts, memory, /clock",
+             "sweep": "physics-sweep on a local Ray: runs/s on 1, 2 and all cores, overhead per run"}
     sub.add_parser("mutations", add_help=False,
                    help="plant physics bugs one at a time and report which the tests catch "
                         "(physics-bench mutations --help)")
-    for name in STUDIES + ("all", "hostile"):
+    for name in STUDIES + ("all", "hostile", "sweep"):
         s = sub.add_parser(name, help=helps[name])
         s.add_argument("--quick", action="store_true",
                        help="CI-sized run: fewer step sizes, shorter runs, fewer bodies")
@@ -114,6 +126,10 @@ def main(argv=None):
         args.only = None
     studies = STUDIES if args.study == "all" else (args.study,)
     start = perf_counter()
+    if args.study == "sweep":        # its figures go to the README's scaling section, not the results summary
+        RUNNERS["sweep"](args)
+        sys.stderr.write(f"wrote {os.path.join(args.out, 'sweep.md')} ({perf_counter() - start:.0f} s)\n")
+        return 0
     for name in studies:
         t0 = perf_counter()
         sys.stderr.write(f"== {name}{' (quick)' if args.quick else ''} ==\n")
