@@ -29,7 +29,7 @@ from physics_sweep.ray_runner import keep_ray_on_loopback, run_on_ray
 
 from .results_io import machine, write_json, write_text
 
-RUN_SECONDS = 0.08
+RUN_SECONDS = 0.1
 MEASURES = ("ball.position.z:max", "energy:end")
 
 

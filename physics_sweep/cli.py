@@ -97,9 +97,21 @@ def _resimulate(args):
     return corpus.exit_status(reports)
 
 
+def _check(args):
+    if args.serial and args.address:
+        raise SweepError("--serial runs in this process; --address names a Ray cluster: give one or the other")
+    if args.workers is not None and (args.address or args.workers < 1):
+        raise SweepError("--workers N (>= 1) sizes the local Ray; a cluster at --address has its own CPUs")
+    if args.batch is not None and args.batch < 1:
+        raise SweepError(f"--batch: an integer >= 1, got {args.batch}")
+    if args.flush_every < 1 or args.retries < 0:
+        raise SweepError("--flush-every is >= 1 and --retries >= 0")
+
+
 def main(argv=None):
     args = build_parser().parse_args(argv)
     try:
+        _check(args)
         if args.resimulate:
             if args.scene:
                 raise SweepError("--resimulate takes recordings, not a scene; give one or the other")

@@ -19,6 +19,7 @@ into tasks, results streamed back with `ray.wait` as tasks finish.
 """
 import math
 import os
+import re
 import sys
 from itertools import islice
 
@@ -39,8 +40,16 @@ def connect(address=None, workers=None):
     if address:
         ray.init(address=address)
     else:
-        ray.init(num_cpus=workers, include_dashboard=False)
+        # Workers are new processes: they import this checkout, whatever put it on this process's path.
+        ray.init(num_cpus=workers, include_dashboard=False,
+                 runtime_env={"env_vars": {"PYTHONPATH": _import_path()}})
     return True
+
+
+def _import_path():
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    paths = [root, os.getcwd()] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
+    return os.pathsep.join(dict.fromkeys(paths))
 
 
 def keep_ray_on_loopback():
@@ -91,7 +100,8 @@ class BatchSizer:
 
 def _lost_rows(plan, runs, error):
     from .runs import worker_name
-    text = f"task failed after its retries: {type(error).__name__}: {error}".splitlines()[0]
+    lines = [ln.strip() for ln in re.sub(r"\x1b\[[0-9;]*m", "", str(error)).splitlines() if ln.strip()]
+    text = f"task failed after its retries: {type(error).__name__}: " + " ... ".join(dict.fromkeys(lines[:1] + lines[-1:]))
     out = []
     for r in runs:
         row = {"run_id": r.run_id, "seed": r.seed, **dict(r.params), **{m: None for m in plan.measures}}

@@ -248,3 +248,19 @@ def test_cli_reports_bad_arguments_with_status_2(tmp_path):
     assert r.returncode == 2 and "physics-sweep: error:" in r.stderr and "nope" in r.stderr
     r = subprocess.run(base + ["default", "--resimulate", "x.mcap"], capture_output=True, text=True, timeout=120)
     assert r.returncode == 2 and "not a scene" in r.stderr
+
+
+def test_cli_resimulate_prints_each_recording_and_exits_1_on_a_divergence(tmp_path):
+    from sweep_support import SPIN_SCENE, write_recording
+    write_recording(tmp_path / "a.mcap", SPIN_SCENE, 40, impulse_at=10)
+    write_recording(tmp_path / "b.mcap", SPIN_SCENE, 40, impulse_at=10, tamper_step=25)
+    (tmp_path / "c.mcap").write_bytes(b"not an mcap file")
+    cmd = [sys.executable, "-m", "physics_sweep", "--serial", "--resimulate", str(tmp_path / "[ab].mcap")]
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 1, r.stdout + r.stderr
+    lines = r.stdout.splitlines()
+    assert lines[0] == f"{tmp_path / 'a.mcap'}: match"
+    assert lines[1] == f"{tmp_path / 'b.mcap'}: diverge at step 25, body 'box'"
+    assert lines[-1] == "2 recordings: 1 match, 1 diverge, 0 error"
+    r = subprocess.run(cmd[:-1] + [str(tmp_path / "*.mcap")], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and r.stdout.splitlines()[-1] == "3 recordings: 1 match, 1 diverge, 1 error"
