@@ -199,7 +199,11 @@ class Vary:
 
     def column_type(self):
         """'bool', 'int', 'float' or 'str': what every value of this key is."""
-        vals = ([self.values.low, self.values.high] if isinstance(self.values, Range) else self.values)
+        r = self.values
+        if isinstance(r, Range):      # a grid's own values (0:1:11 is floats); a random draw's ends
+            vals = r.grid() if r.count is not None else [r.low, r.high]
+        else:
+            vals = r
         if all(isinstance(v, bool) for v in vals):
             return "bool"
         if all(isinstance(v, int) and not isinstance(v, bool) for v in vals):

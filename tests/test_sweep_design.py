@@ -74,6 +74,19 @@ def test_values_grammar():
     assert Vary.parse("dt=1/240,1/480").column_type() == "float"
 
 
+def test_grid_between_integer_ends_with_fractional_steps_is_a_float_column(tmp_path):
+    """Regression: `0:1:11` has integer ends but values 0.0, 0.1, ...; its
+    column was typed int64 from the ends and the file held 0 and 1."""
+    assert Vary.parse("bodies[ball].restitution=0:1:11").column_type() == "float"
+    assert Vary.parse("k=0:10:11").column_type() == "int" and Vary.parse("k=0:10").column_type() == "int"
+    from physics_sweep import sweep
+    out = tmp_path / "r.parquet"
+    sweep(copy.deepcopy(DROP_SCENE), ["bodies[ball].restitution=0:1:11"], duration=0.01, out=out,
+          serial=True, progress=False)
+    values = pq.read_table(out).sort_by("run_id").column("bodies[ball].restitution").to_pylist()
+    assert values == [i / 10 for i in range(11)]
+
+
 def test_grid_design_is_the_product_in_order_with_seeds_innermost():
     d = Design((Vary.parse("a=0:1:3"), Vary.parse("b=x,y")), seeds=2)
     runs = list(d.runs())
