@@ -122,6 +122,10 @@ def main(argv=None):
     except (SweepError, SceneError) as e:
         print(f"physics-sweep: error: {e}", file=sys.stderr, flush=True)
         return 2
+    except ConnectionError as e:          # ray.init: no cluster at --address
+        print(f"physics-sweep: error: cannot reach the Ray cluster at {args.address!r}: {e}", file=sys.stderr,
+              flush=True)
+        return 2
     except KeyboardInterrupt:
         return 130
 

@@ -20,6 +20,7 @@ into tasks, results streamed back with `ray.wait` as tasks finish.
 import math
 import os
 import re
+import socket
 import sys
 from itertools import islice
 
@@ -38,6 +39,7 @@ def connect(address=None, workers=None):
     if ray.is_initialized():
         return False
     if address:
+        _check_reachable(address)
         ray.init(address=address)
     else:
         # Workers are new processes: they import this checkout, whatever put it on this process's path.
@@ -50,6 +52,19 @@ def _import_path():
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     paths = [root, os.getcwd()] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
     return os.pathsep.join(dict.fromkeys(paths))
+
+
+def _check_reachable(address):
+    """Fail in seconds, not minutes: ray.init keeps retrying an address where nothing listens."""
+    if address == "auto":
+        return
+    hostport = address.split("://", 1)[-1]
+    host, _, port = hostport.rpartition(":")
+    try:
+        socket.create_connection((host, int(port)), timeout=5.0).close()
+    except (OSError, ValueError) as e:
+        raise ConnectionError(f"nothing answers at {hostport} ({e}); on the head machine: "
+                              "ray start --head (GCS port 6379, Ray Client port 10001)") from None
 
 
 def keep_ray_on_loopback():

@@ -109,6 +109,9 @@ class ResultsFile:
         """Flush, then stream OUT and the parts into a new OUT; returns its row count."""
         self.flush()
         sources = self._existing_files()
+        if not sources:                # nothing ran (Ray unreachable, Ctrl-C at once): no empty file
+            self._remove_parts_dir()
+            return 0
         tmp = self.path + ".tmp"
         seen = set()      # a merge cut short after its rename leaves parts already in OUT
         with pq.ParquetWriter(tmp, self.schema) as writer:
@@ -123,8 +126,11 @@ class ResultsFile:
         os.replace(tmp, self.path)
         for f in sources[1 if sources and sources[0] == self.path else 0:]:
             os.remove(f)
+        self._remove_parts_dir()
+        return len(seen)
+
+    def _remove_parts_dir(self):
         for f in glob.glob(os.path.join(self.parts_dir, "*.tmp")):
             os.remove(f)       # a part cut short by a kill
         if os.path.isdir(self.parts_dir) and not os.listdir(self.parts_dir):
             os.rmdir(self.parts_dir)
-        return len(seen)

@@ -263,6 +263,20 @@ def test_cli_reports_bad_arguments_with_status_2(tmp_path):
     assert r.returncode == 2 and "not a scene" in r.stderr
 
 
+def test_unreachable_cluster_is_an_error_in_seconds_and_leaves_no_file(tmp_path):
+    """Regression: ray.init retried an address where nothing listens for minutes."""
+    import socket
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]          # free, and closed again: nothing listens there
+    out = tmp_path / "x.parquet"
+    r = subprocess.run([sys.executable, "-m", "physics_sweep", "default", "--vary", "dt=1/240,1/480", "--quiet",
+                        "--out", str(out), "--address", f"127.0.0.1:{port}"], capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 2 and f"cannot reach the Ray cluster at '127.0.0.1:{port}'" in r.stderr, r.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_cli_resimulate_prints_each_recording_and_exits_1_on_a_divergence(tmp_path):
     from sweep_support import SPIN_SCENE, write_recording
     write_recording(tmp_path / "a.mcap", SPIN_SCENE, 40, impulse_at=10)
