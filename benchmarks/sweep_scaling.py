@@ -116,19 +116,22 @@ def markdown(d):
              f"after {d['load_after'][0]:.1f} (1 min), on {d['cores']} cores.\n",
              f"Runs: the default scene for {d['duration']} s simulated, measured every step; one serial run "
              f"takes {s['run_cpu_s'] * 1e3:.0f} ms of CPU.\n",
-             "| how | workers | runs/s | speed-up over serial | cpu share | overhead per run, ms | Ray start, s |",
-             "| --- | ---: | ---: | ---: | ---: | ---: | ---: |",
-             f"| serial loop | 1 | {s['runs_per_s']:.2f} | 1.00 | {s['cpu_share']:.2f} | | |"]
+             "| how | workers | runs/s | speed-up over serial | cpu share | inside runs | overhead per run, ms "
+             "| Ray start, s |",
+             "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
+             f"| serial loop | 1 | {s['runs_per_s']:.2f} | 1.00 | {s['cpu_share']:.2f} | | | |"]
     for r in d["ray"]:
+        inside = 1.0 - r["overhead_per_run_s"] * r["runs_per_s"] / r["workers"]
         lines.append(f"| Ray, local | {r['workers']} | {r['runs_per_s']:.2f} | "
-                     f"{r['runs_per_s'] / s['runs_per_s']:.2f} | {r['cpu_share']:.2f} | "
+                     f"{r['runs_per_s'] / s['runs_per_s']:.2f} | {r['cpu_share']:.2f} | {inside:.3f} | "
                      f"{r['overhead_per_run_s'] * 1e3:.1f} | {r['start_s']:.1f} |")
     o = d["overhead"]
     lines += ["", f"Scheduling overhead ({o['runs']} one-step runs on one worker; a serial run of one is "
               f"{o['serial_per_run_s'] * 1e3:.2f} ms, the scene build included): "
               f"{o['ray_one_per_task_s'] * 1e3:.2f} ms per run with one run per task, "
               f"{o['ray_batched_s'] * 1e3:.3f} ms per run batched as physics-sweep batches.",
-              "", "`overhead per run`: wall seconds × workers not spent inside a run, per run (scheduling, "
-              "results back, idle at the end). `cpu share`: the runs' own CPU seconds over wall seconds × workers; below 1 the workers "
+              "", "`inside runs`: the share of the workers' wall time spent inside runs; `overhead per run`: "
+              "wall seconds × workers not spent inside a run, per run (scheduling, results back, idle at "
+              "the end). `cpu share`: the runs' own CPU seconds over wall seconds × workers; below 1 the workers "
               "waited for a core (other processes on the machine) or for work."]
     return "\n".join(lines) + "\n"
