@@ -17,6 +17,7 @@ into tasks, results streamed back with `ray.wait` as tasks finish.
   fails after its retries gives each of its runs a row with the error.
   A run that raises is not a task failure: its error is in its row.
 """
+import logging
 import math
 import os
 import re
@@ -43,7 +44,7 @@ def connect(address=None, workers=None):
         ray.init(address=address)
     else:
         # Workers are new processes: they import this checkout, whatever put it on this process's path.
-        ray.init(num_cpus=workers, include_dashboard=False,
+        ray.init(num_cpus=workers, include_dashboard=False, logging_level=logging.WARNING,
                  runtime_env={"env_vars": {"PYTHONPATH": _import_path()}})
     return True
 
