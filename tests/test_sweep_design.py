@@ -200,6 +200,13 @@ def test_a_run_that_raises_records_its_error_and_the_others_go_on():
     assert rows[0]["ball.position.z:max"] == pytest.approx(1.0, abs=1e-12)
 
 
+def test_a_grid_range_without_a_count_is_refused_before_the_sweep():
+    with pytest.raises(SweepError, match=re_literal("a grid needs a count (low:high:count)")):
+        _plan(vary=["bodies[ball].restitution=0:1"])
+    plan = _plan(vary=["bodies[ball].restitution=0:1"], samples=5)     # random: LOW:HIGH is enough
+    assert len(plan.design) == 5
+
+
 def test_a_typo_in_a_varied_key_fails_the_sweep_at_once():
     with pytest.raises(SweepError, match="no such key.*restitutoin"):
         _plan(vary=["bodies[ball].restitutoin=0:1:3"])

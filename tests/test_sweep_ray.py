@@ -104,13 +104,15 @@ def test_two_node_sweep_of_200_runs_equals_the_serial_run_bit_for_bit(cluster, t
     assert len(set(first)) == 20
 
 
-def test_killing_a_worker_inside_a_task_still_gives_200_rows_each_once(cluster, tmp_path):
-    plan = _plan(measures=MEASURES + ["sweep_support:stall_once"])
-    (cluster.stall / "armed").write_text("")
+def _kill_the_stalled_worker(stall):
+    """Arm the stall; a thread kills the worker that claims it. Returns (thread, {'pid': ...})."""
+    for name in ("pid", "claimed"):
+        (stall / name).unlink(missing_ok=True)
+    (stall / "armed").write_text("")
     killed = {}
 
     def killer():
-        pid_file = cluster.stall / "pid"
+        pid_file = stall / "pid"
         deadline = time.monotonic() + 60.0
         while not pid_file.exists() and time.monotonic() < deadline:
             time.sleep(0.01)
@@ -119,6 +121,12 @@ def test_killing_a_worker_inside_a_task_still_gives_200_rows_each_once(cluster, 
 
     thread = threading.Thread(target=killer, daemon=True)
     thread.start()
+    return thread, killed
+
+
+def test_killing_a_worker_inside_a_task_still_gives_200_rows_each_once(cluster, tmp_path):
+    plan = _plan(measures=MEASURES + ["sweep_support:stall_once"])
+    thread, killed = _kill_the_stalled_worker(cluster.stall)
     out = tmp_path / "killed.parquet"
     results = ResultsFile(out, plan, flush_rows=50)
     run_on_ray(plan, plan.design.runs(), len(plan.design), results.add, batch=10)
@@ -131,6 +139,21 @@ def test_killing_a_worker_inside_a_task_still_gives_200_rows_each_once(cluster, 
     with pytest.raises(ProcessLookupError):
         os.kill(killed["pid"], 0)
     _assert_same_as_serial(table, plan)
+
+
+def test_a_task_that_fails_past_its_retries_gives_its_runs_error_rows(cluster):
+    plan = _plan(measures=["sweep_support:stall_once"])
+    thread, killed = _kill_the_stalled_worker(cluster.stall)
+    rows = []
+    run_on_ray(plan, plan.design.runs(), len(plan.design), rows.extend, batch=10, retries=0)
+    thread.join(timeout=60)
+    assert sorted(r["run_id"] for r in rows) == list(range(200))
+    lost = [r for r in rows if r["error"]]
+    assert len(lost) == 10, "exactly the killed task's batch"
+    assert all(r["error"].startswith("task failed after its retries: WorkerCrashedError") for r in lost), lost[0]
+    assert all(r["sweep_support:stall_once"] is None for r in lost)
+    ids = sorted(r["run_id"] for r in lost)
+    assert ids == list(range(ids[0], ids[0] + 10)), "one batch: ten runs in design order"
 
 
 def test_resume_after_an_interrupted_sweep_completes_it_without_repeats(cluster, tmp_path):
