@@ -102,6 +102,10 @@ def _children(node, kind, v, where):
         return [v]
     if not isinstance(node, list):
         raise SweepError(f"{at} is {'missing' if node is None else type(node).__name__}, not a list to select from")
+    return _list_children(node, kind, v, at)
+
+
+def _list_children(node, kind, v, at):
     if kind == "all":
         return list(range(len(node)))
     if kind == "index":
@@ -153,17 +157,21 @@ class Range:
 def parse_values(text, label):
     """`0:1:11` → Range; `1/240,1/480` → a list of values."""
     if ":" in text and "," not in text:
-        parts = [parse_scalar(p) for p in text.split(":")]
-        if len(parts) not in (2, 3) or not all(_is_number(p) for p in parts[:2]):
-            raise SweepError(f"--vary {label!r}: a range is low:high:count (numbers), got {text!r}")
-        count = parts[2] if len(parts) == 3 else None
-        if count is not None and (not isinstance(count, int) or count < 1):
-            raise SweepError(f"--vary {label!r}: the count of low:high:count is an integer >= 1, got {text!r}")
-        return Range(parts[0], parts[1], count)
+        return _parse_range(text, label)
     values = [parse_scalar(p) for p in text.split(",")]
     if any(v == "" for v in values):
         raise SweepError(f"--vary {label!r}: an empty value in {text!r}")
     return values
+
+
+def _parse_range(text, label):
+    parts = [parse_scalar(p) for p in text.split(":")]
+    if len(parts) not in (2, 3) or not all(_is_number(p) for p in parts[:2]):
+        raise SweepError(f"--vary {label!r}: a range is low:high:count (numbers), got {text!r}")
+    count = parts[2] if len(parts) == 3 else None
+    if count is not None and (not isinstance(count, int) or isinstance(count, bool) or count < 1):
+        raise SweepError(f"--vary {label!r}: the count of low:high:count is an integer >= 1, got {text!r}")
+    return Range(parts[0], parts[1], count)
 
 
 def _is_number(v):

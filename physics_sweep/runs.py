@@ -42,11 +42,7 @@ class SweepPlan:
              measures=(), perturbs=None):
         """Parse and check every spec against the scene (SweepError/SceneError name what is wrong)."""
         data, source = _scene_data(scene)
-        if not (isinstance(duration, (int, float)) and duration > 0):
-            raise SweepError(f"--duration: a number of seconds > 0, got {duration!r}")
-        for name, n in (("--seeds", seeds), ("--samples", samples)):
-            if n is not None and (not isinstance(n, int) or n < 1):
-                raise SweepError(f"{name}: an integer >= 1, got {n!r}")
+        _check_counts(duration, seeds, samples)
         design = Design(tuple(v if isinstance(v, Vary) else Vary.parse(v) for v in vary),
                         samples, seeds, int(design_seed))
         if perturbs is None:
@@ -88,6 +84,14 @@ class SweepPlan:
             "design_seed": self.design.design_seed, "duration": self.duration,
             "measures": list(self.measures), "perturbs": [f"{p.key}={p.sigma!r}" for p in self.perturbs],
         }
+
+
+def _check_counts(duration, seeds, samples):
+    if isinstance(duration, bool) or not (isinstance(duration, (int, float)) and duration > 0):
+        raise SweepError(f"--duration: a number of seconds > 0, got {duration!r}")
+    for name, n in (("--seeds", seeds), ("--samples", samples)):
+        if n is not None and (isinstance(n, bool) or not isinstance(n, int) or n < 1):
+            raise SweepError(f"{name}: an integer >= 1, got {n!r}")
 
 
 def _scene_data(scene):
