@@ -270,6 +270,64 @@ def parse_springs(r: Reader, index):
         damping=frozen_array(cols["damping"]))
 
 
+def parse_bodies(r, data, known):
+    """(body dicts, name → index) of the scene's `bodies`, names unique."""
+    body_readers = r.items("bodies")
+    if not body_readers:
+        r.fail("bodies", "a list of at least one body", data.get("bodies"))
+    bodies, index = [], {}
+    for br in body_readers:
+        b = parse_body(br, known)
+        if b["name"] in index:
+            br.fail("name", "a name not used by another body", b["name"])
+        index[b["name"]] = len(bodies)
+        bodies.append(b)
+    return bodies, index
+
+
+def material_fields(bodies, table, effects, source):
+    """The Model's material fields: the materials used, per-body index, and
+    the pair friction matrices (warning once about table fallbacks)."""
+    used = sorted({b["material"] for b in bodies})
+    mu_s, mu_k, fallbacks = friction_matrices(used, table)
+    if fallbacks and "contacts" in effects:
+        warnings.warn(f"{source}: friction pairs not in the table use the fallback "
+                      f"μ_s={materials.FALLBACK_FRICTION[0]}, μ_k={materials.FALLBACK_FRICTION[1]}: "
+                      + ", ".join(f"{a}-{b}" for a, b in fallbacks), stacklevel=4)
+    return dict(material=frozen_array([used.index(b["material"]) for b in bodies], int),
+                material_names=tuple(used), mu_static=frozen_array(mu_s),
+                mu_kinetic=frozen_array(mu_k), friction_fallbacks=fallbacks)
+
+
+def body_fields(bodies):
+    """The Model's per-body arrays: shape, mass and inertia (static: infinite),
+    restitution, drag, and the initial state."""
+    col = lambda k, dtype=float: np.array([b[k] for b in bodies], dtype=dtype)
+    stype, radius, static, mass = col("stype", int), col("radius"), col("static", bool), col("mass")
+    half = np.array([b["half"] for b in bodies]).reshape(-1, 3)
+    inv_mass = np.where(static, 0.0, 1.0 / np.where(mass > 0, mass, 1.0))
+    inertia = shapes.principal_inertia(stype, mass, radius, half)
+    inv_inertia = np.where(static[:, None] | (inertia <= 0), 0.0,
+                           1.0 / np.where(inertia > 0, inertia, 1.0))
+    drag = np.array([b["drag"] for b in bodies]).reshape(-1, 3)
+    initial = MappingProxyType({k: frozen_array([b[k] for b in bodies])
+                                for k in ("pos", "quat", "vel", "omega")})
+    return dict(
+        shape_type=frozen_array(stype, int), radius=frozen_array(radius),
+        half_extents=frozen_array(half),
+        plane_normal=frozen_array([b["normal"] for b in bodies]),
+        plane_offset=frozen_array(col("offset")),
+        mass=frozen_array(mass), inv_mass=frozen_array(inv_mass),
+        inertia=frozen_array(inertia), inv_inertia=frozen_array(inv_inertia),
+        is_static=frozen_array(static, bool),
+        volume=frozen_array(shapes.volume(stype, radius, half)),
+        restitution=frozen_array(col("restitution")),
+        drag_cd=frozen_array(drag[:, 0]), drag_area=frozen_array(drag[:, 1]),
+        drag_b=frozen_array(drag[:, 2]),
+        char_length=frozen_array(shapes.characteristic_length(stype, radius, half)),
+        initial=initial)
+
+
 def build_model(scene, max_bodies=MAX_BODIES) -> Model:
     data, source, text, path = read_scene_source(scene, max_bodies)
     if data is None:
@@ -289,65 +347,15 @@ def build_model(scene, max_bodies=MAX_BODIES) -> Model:
     table = materials.build_table(extra_pairs)
     known = set(materials.COURSE_MATERIALS) | {materials.DEFAULT_MATERIAL}
     known |= {m for pair in extra_pairs for m in pair}
-
-    body_readers = r.items("bodies")
-    if not body_readers:
-        r.fail("bodies", "a list of at least one body", data.get("bodies"))
-    bodies, index = [], {}
-    for br in body_readers:
-        b = parse_body(br, known)
-        if b["name"] in index:
-            br.fail("name", "a name not used by another body", b["name"])
-        index[b["name"]] = len(bodies)
-        bodies.append(b)
+    bodies, index = parse_bodies(r, data, known)
     springs = parse_springs(r, index)
-
-    used = sorted({b["material"] for b in bodies})
-    mu_s, mu_k, fallbacks = friction_matrices(used, table)
-    if fallbacks and "contacts" in effects:
-        warnings.warn(f"{source}: friction pairs not in the table use the fallback "
-                      f"μ_s={materials.FALLBACK_FRICTION[0]}, μ_k={materials.FALLBACK_FRICTION[1]}: "
-                      + ", ".join(f"{a}-{b}" for a, b in fallbacks), stacklevel=3)
-
-    col = lambda k, dtype=float: np.array([b[k] for b in bodies], dtype=dtype)
-    stype = col("stype", int)
-    radius = col("radius")
-    half = np.array([b["half"] for b in bodies]).reshape(-1, 3)
-    static = col("static", bool)
-    mass = col("mass")
-    inv_mass = np.where(static, 0.0, 1.0 / np.where(mass > 0, mass, 1.0))
-    inertia = shapes.principal_inertia(stype, mass, radius, half)
-    inv_inertia = np.where(static[:, None] | (inertia <= 0), 0.0,
-                           1.0 / np.where(inertia > 0, inertia, 1.0))
-    drag = np.array([b["drag"] for b in bodies]).reshape(-1, 3)
-    initial = MappingProxyType({
-        "pos": frozen_array([b["pos"] for b in bodies]),
-        "quat": frozen_array([b["quat"] for b in bodies]),
-        "vel": frozen_array([b["vel"] for b in bodies]),
-        "omega": frozen_array([b["omega"] for b in bodies]),
-    })
     return Model(
         names=tuple(index), index=MappingProxyType(dict(index)),
-        shape_type=frozen_array(stype, int), radius=frozen_array(radius),
-        half_extents=frozen_array(half),
-        plane_normal=frozen_array([b["normal"] for b in bodies]),
-        plane_offset=frozen_array(col("offset")),
-        mass=frozen_array(mass), inv_mass=frozen_array(inv_mass),
-        inertia=frozen_array(inertia), inv_inertia=frozen_array(inv_inertia),
-        is_static=frozen_array(static, bool),
-        volume=frozen_array(shapes.volume(stype, radius, half)),
-        restitution=frozen_array(col("restitution")),
-        material=frozen_array([used.index(b["material"]) for b in bodies], int),
-        material_names=tuple(used), mu_static=frozen_array(mu_s), mu_kinetic=frozen_array(mu_k),
-        friction_fallbacks=fallbacks,
-        drag_cd=frozen_array(drag[:, 0]), drag_area=frozen_array(drag[:, 1]),
-        drag_b=frozen_array(drag[:, 2]),
-        char_length=frozen_array(shapes.characteristic_length(stype, radius, half)),
+        **body_fields(bodies), **material_fields(bodies, table, effects, source),
         springs=springs,
         gravity=None if gravity is None else frozen_array(gravity),
         effects=MappingProxyType(effects), dt=dt, substeps=substeps, integrator=integrator,
-        accuracy=accuracy,
-        initial=initial, source_text=text, source_path=path,
+        accuracy=accuracy, source_text=text, source_path=path,
         extra=MappingProxyType({"friction_pairs": MappingProxyType(extra_pairs)}),
     )
 
