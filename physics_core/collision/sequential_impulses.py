@@ -105,21 +105,29 @@ def update_normal(R, I, c, vel, omega):
 
 
 @njit(cache=True)
+def update_manifold(R, I, M, MI, k, vel, omega):
+    """One update of manifold k: a single point as one contact; two or more,
+    their normal rows, then their friction anchor (manifold_friction.py).
+    Returns its largest impulse change (NaN if any change is NaN)."""
+    first, count = MI[k, FIRST], MI[k, COUNT]
+    if count < 2:
+        return update_contact(R, I, first, vel, omega)
+    change = 0.0
+    for c in range(first, first + count):
+        d = update_normal(R, I, c, vel, omega)
+        if not d < change:
+            change = d
+    d = update_anchor(R, I, M, MI, k, vel, omega)
+    return d if not d < change else change
+
+
+@njit(cache=True)
 def sweep_manifolds(R, I, M, MI, vel, omega):
-    """One Gauss–Seidel sweep, manifold by manifold in key order: a single
-    point as one contact; two or more, their normal rows, then their
-    friction anchor (manifold_friction.py). Returns the largest change."""
+    """One Gauss–Seidel sweep, manifold by manifold in key order
+    (`update_manifold`). Returns the largest change."""
     change = 0.0
     for k in range(len(MI)):
-        first, count = MI[k, FIRST], MI[k, COUNT]
-        if count >= 2:
-            for c in range(first, first + count):
-                d = update_normal(R, I, c, vel, omega)
-                if not d < change:
-                    change = d
-            d = update_anchor(R, I, M, MI, k, vel, omega)
-        else:
-            d = update_contact(R, I, first, vel, omega)
+        d = update_manifold(R, I, M, MI, k, vel, omega)
         if not d < change:
             change = d
     return change

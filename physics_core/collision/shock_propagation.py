@@ -36,8 +36,8 @@ from numba import njit
 
 from .contact_build import effective_masses
 from .contact_layout import ARM_A, ARM_B, BODY_A, BODY_B, INV_MASS_A, INV_MASS_B, LAM, TURN_A, TURN_B
-from .manifold_friction import COUNT, FIRST, IMA, IMB, M_LAM, TA, TB, _invert, update_anchor
-from .sequential_impulses import update_contact, update_normal
+from .manifold_friction import COUNT, FIRST, IMA, IMB, M_LAM, TA, TB, _invert
+from .sequential_impulses import update_manifold
 
 UNREACHED = np.int64(1) << 40
 
@@ -129,18 +129,20 @@ def _one_sided(R, I, M, MI, layer, order):
 
 @njit(cache=True)
 def _upward_order(I, MI, layer):
-    """Manifolds touching something immovable, by (higher layer, lower layer),
-    key order within (a stable sort: deterministic)."""
+    """(order, top): the manifolds touching something immovable, by (higher
+    layer, lower layer), key order within (a stable sort: deterministic),
+    and the higher layer of each."""
     rank = np.empty(len(MI), np.int64)
+    top = np.empty(len(MI), np.int64)
     for k in range(len(MI)):
         la, lb = layer[I[MI[k, FIRST], BODY_A]], layer[I[MI[k, FIRST], BODY_B]]
-        hi, lo = max(la, lb), min(la, lb)
-        rank[k] = UNREACHED if lo == UNREACHED else hi * (len(layer) + 1) + lo
+        top[k], lo = max(la, lb), min(la, lb)
+        rank[k] = UNREACHED if lo == UNREACHED else top[k] * (len(layer) + 1) + lo
     order = np.argsort(rank, kind="mergesort")
     m = 0
     while m < len(order) and rank[order[m]] != UNREACHED:
         m += 1
-    return order[:m]
+    return order[:m], top[order[:m]]
 
 
 @njit(cache=True)
@@ -168,21 +170,16 @@ def _velocity_change(vel, omega, a, b, before, lever):
 
 
 @njit(cache=True)
-def _update(R1, I, M1, MI, k, vel, omega, before):
+def _update(R1, I, M1, MI, k, vel, omega, before, lever):
     """One update of manifold k; returns the largest change of a contact-point
-    velocity of its bodies it made (m/s)."""
-    first, count = MI[k, FIRST], MI[k, COUNT]
+    velocity of its bodies it made (m/s); `lever`: its `_lever`."""
+    first = MI[k, FIRST]
     a, b = I[first, BODY_A], I[first, BODY_B]
     for i in range(3):
         before[i], before[3 + i] = vel[a, i], omega[a, i]
         before[6 + i], before[9 + i] = vel[b, i], omega[b, i]
-    if count >= 2:
-        for c in range(first, first + count):
-            update_normal(R1, I, c, vel, omega)
-        update_anchor(R1, I, M1, MI, k, vel, omega)
-    else:
-        update_contact(R1, I, first, vel, omega)
-    return _velocity_change(vel, omega, a, b, before, _lever(R1, first, count))
+    update_manifold(R1, I, M1, MI, k, vel, omega)
+    return _velocity_change(vel, omega, a, b, before, lever)
 
 
 @njit(cache=True)
@@ -194,26 +191,15 @@ def _settle(R1, I, M1, MI, group, vel, omega, passes, tolerance, before):
     corners tilts). The test is on velocities, not impulses: four coplanar
     corners share a load in many ways, so their impulses can keep trading
     while the body's velocity has long settled."""
+    levers = np.empty(len(group))
+    for m in range(len(group)):
+        levers[m] = _lever(R1, MI[group[m], FIRST], MI[group[m], COUNT])
     for _ in range(passes):
         change = 0.0
-        for k in group:
-            change = max(change, _update(R1, I, M1, MI, k, vel, omega, before))
+        for m in range(len(group)):
+            change = max(change, _update(R1, I, M1, MI, group[m], vel, omega, before, levers[m]))
         if tolerance > 0.0 and change < tolerance:
             return
-
-
-@njit(cache=True)
-def _layer_end(I, MI, layer, order, g):
-    """End of the run of `order` from g whose manifolds reach the same layer."""
-    first = MI[order[g], FIRST]
-    hi = max(layer[I[first, BODY_A]], layer[I[first, BODY_B]])
-    e = g + 1
-    while e < len(order):
-        f = MI[order[e], FIRST]
-        if max(layer[I[f, BODY_A]], layer[I[f, BODY_B]]) != hi:
-            break
-        e += 1
-    return e
 
 
 @njit(cache=True)
@@ -224,12 +210,14 @@ def shock_sweep(R, I, M, MI, vel, omega, n, passes, tolerance):
     if len(MI) == 0:
         return 0
     layer = support_layers(R, I, n)
-    order = _upward_order(I, MI, layer)
+    order, top = _upward_order(I, MI, layer)
     R1, M1 = _one_sided(R, I, M, MI, layer, order)
     before = np.empty(12)
     g = 0
     while g < len(order):
-        e = _layer_end(I, MI, layer, order, g)
+        e = g + 1
+        while e < len(order) and top[e] == top[g]:
+            e += 1
         _settle(R1, I, M1, MI, order[g:e], vel, omega, passes, tolerance, before)
         g = e
     for c in range(len(R)):
