@@ -161,53 +161,71 @@ def parse_shape(br: Reader):
 
 def parse_body(br: Reader, known_materials):
     br.only(BODY_KEYS)
-    name = br.string("name")
-    if not NAME_RE.match(name) or name == "world":
-        br.fail("name", "a name of letters, digits and _ starting with a letter, not 'world' "
-                "(it becomes a ROS topic name)", name)
+    name = _body_name(br)
     stype, radius, half, normal, offset = parse_shape(br)
     static = br.boolean("static", stype == shapes.PLANE)
     if stype == shapes.PLANE and not static:
         br.fail("static", "true: a plane is a static half-space", False)
-    if br.has("mass") and br.has("density"):
-        br.fail("density", "either mass or density, not both", br.data["density"])
-    vol = float(shapes.volume(np.array([stype]), np.array([radius]), half[None])[0])
-    if br.has("mass"):
-        mass = br.number("mass", positive=True)
-    elif br.has("density"):
-        if stype == shapes.PLANE:
-            br.fail("density", "no density on a plane (it has no volume)", br.data["density"])
-        mass = br.number("density", positive=True) * vol
-    elif static:
-        mass = 0.0
-    else:
-        br.fail("mass", "mass (kg) or density (kg/m³) for a dynamic body", "missing")
+    mass = _body_mass(br, stype, radius, half, static)
     material = br.string("material", materials.DEFAULT_MATERIAL)
     if material not in known_materials:
         br.fail("material", "a material of the friction table: " + ", ".join(sorted(known_materials)),
                 material)
     restitution = br.number("restitution", DEFAULT_RESTITUTION, min=0.0, max=1.0)
+    pos, quat, vel, omega = _body_motion(br, static)
+    return dict(name=name, stype=stype, radius=radius, half=half, normal=normal, offset=offset,
+                static=static, mass=mass, material=material, restitution=restitution,
+                pos=pos, quat=quat, vel=vel, omega=omega, drag=_body_drag(br, stype))
+
+
+def _body_name(br: Reader):
+    name = br.string("name")
+    if not NAME_RE.match(name) or name == "world":
+        br.fail("name", "a name of letters, digits and _ starting with a letter, not 'world' "
+                "(it becomes a ROS topic name)", name)
+    return name
+
+
+def _body_mass(br: Reader, stype, radius, half, static):
+    """`mass`, or `density` times the shape's volume; 0 for a static body without either."""
+    if br.has("mass") and br.has("density"):
+        br.fail("density", "either mass or density, not both", br.data["density"])
+    if br.has("mass"):
+        return br.number("mass", positive=True)
+    if br.has("density"):
+        if stype == shapes.PLANE:
+            br.fail("density", "no density on a plane (it has no volume)", br.data["density"])
+        vol = float(shapes.volume(np.array([stype]), np.array([radius]), half[None])[0])
+        return br.number("density", positive=True) * vol
+    if not static:
+        br.fail("mass", "mass (kg) or density (kg/m³) for a dynamic body", "missing")
+    return 0.0
+
+
+def _body_motion(br: Reader, static):
+    """(position, unit orientation, velocity, angular velocity) of a body."""
     pos = br.vector("position", 3, [0.0, 0.0, 0.0])
     quat = br.vector("orientation", 4, [1.0, 0.0, 0.0, 0.0])
     qn = np.linalg.norm(quat)
     if abs(qn - 1.0) > QUAT_TOLERANCE:
         br.fail("orientation", f"a unit quaternion [w, x, y, z] (|q| = 1 ± {QUAT_TOLERANCE})",
                 br.data["orientation"])
-    quat = quat / qn
     vel = br.vector("velocity", 3, [0.0, 0.0, 0.0])
     omega = br.vector("angular_velocity", 3, [0.0, 0.0, 0.0])
     if static and (np.any(vel) or np.any(omega)):
         br.fail("velocity" if np.any(vel) else "angular_velocity",
                 "zero velocities on a static body", "non-zero")
+    return pos, quat / qn, vel, omega
+
+
+def _body_drag(br: Reader, stype):
+    """(cd, area, b) of the body's `drag:` (NaN: not given, the shape's own is used)."""
     dr = br.sub("drag")
     dr.only({"cd", "area", "b"})
     nan = float("nan")
-    drag = (dr.number("cd", shapes.DEFAULT_CD[stype], min=0.0),
+    return (dr.number("cd", shapes.DEFAULT_CD[stype], min=0.0),
             dr.number("area", positive=True) if dr.has("area") else nan,
             dr.number("b", min=0.0) if dr.has("b") else nan)
-    return dict(name=name, stype=stype, radius=radius, half=half, normal=normal, offset=offset,
-                static=static, mass=mass, material=material, restitution=restitution,
-                pos=pos, quat=quat, vel=vel, omega=omega, drag=drag)
 
 
 def parse_friction(r: Reader):

@@ -67,13 +67,16 @@ class Reader:
             self.fail(key, kind, v)
         if not _finite(v):
             self.fail(key, "a finite number", v)
+        self._check_range(key, v, kind, min, max, positive)
+        return int(v) if integer else float(v)
+
+    def _check_range(self, key, v, kind, min, max, positive):
         if positive and not v > 0:
             self.fail(key, f"{kind} > 0", v)
         if min is not None and v < min:
             self.fail(key, f"{kind} >= {min}", v)
         if max is not None and v > max:
             self.fail(key, f"{kind} <= {max}", v)
-        return int(v) if integer else float(v)
 
     def boolean(self, key, default):
         v = self.data.get(key, default)
