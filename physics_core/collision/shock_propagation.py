@@ -12,15 +12,22 @@ keep up (the heavy cube went through the light one).
 After the sweeps, bodies get support layers: 0 for the immovable ones
 (static or asleep, zero inverse mass), and 1 + the least layer of the
 bodies they touch otherwise (breadth-first over the contacts). The
-manifolds reaching each layer are then solved once more, layer after
+manifolds between two layers are then solved once more, layer after
 layer from the lowest up, with the layer below immovable (its side of a
 row takes no impulse and the effective masses are the upper body's
 alone), sweep after sweep until the layer's velocities settle: every
 contact then ends with the upper body not approaching the lower and,
 within the friction cone, not slipping on it, whatever the mass ratio.
-Contacts within one layer are two-sided as usual. Bodies that touch
-nothing immovable (free-flying groups) are not visited, so their momentum
-is kept exactly. This removes the reaction of an upper body on the lower
+Within a sweep a manifold is updated again only if one of its bodies'
+contact-point velocities changed by the tolerance since the sweep before
+(the rest are settled: updating them changes nothing). Contacts within
+one layer carry no support from below (neither body rests on the other)
+and were solved by the sweeps; leaving them out lets each body settle on
+its own supports instead of every body of a layer converging as one
+group (together the two cut a formed 1,000-sphere pile's sweep from 1.9×
+to 0.75× the cost of the rest of its step, with the stack and mass-ratio
+results unchanged). Bodies that touch nothing immovable (free-flying
+groups) are not visited, so their momentum is kept exactly. This removes the reaction of an upper body on the lower
 within this sweep only: the warm-started sweeps before it carry the
 loads down.
 
@@ -110,34 +117,41 @@ def _freeze_anchor(M, k, side, w):
 
 @njit(cache=True)
 def _one_sided(R, I, M, MI, layer, order):
-    """Copies of R and M with the lower side of every cross-layer manifold of
-    `order` immovable."""
-    R1, M1 = R.copy(), M.copy()
-    w = np.empty((3, 3))
+    """Compact copies (R1, I1, M1, MI1) of the manifolds of `order`, in that
+    order, with the lower layer's side of every row immovable."""
+    rows = 0
     for k in order:
+        rows += MI[k, COUNT]
+    R1, I1 = np.empty((rows, R.shape[1])), np.empty((rows, I.shape[1]), np.int64)
+    M1, MI1 = np.empty((len(order), M.shape[1])), np.empty((len(order), MI.shape[1]), np.int64)
+    w = np.empty((3, 3))
+    r = 0
+    for m in range(len(order)):
+        k = order[m]
         first, count = MI[k, FIRST], MI[k, COUNT]
-        la, lb = layer[I[first, BODY_A]], layer[I[first, BODY_B]]
-        if la == lb:
-            continue
-        side = 0 if la < lb else 1
+        M1[m], MI1[m] = M[k], MI[k]
+        MI1[m, FIRST] = r
+        side = 0 if layer[I[first, BODY_A]] < layer[I[first, BODY_B]] else 1
         for c in range(first, first + count):
-            _freeze_row(R1, c, side)
+            R1[r], I1[r] = R[c], I[c]
+            _freeze_row(R1, r, side)
+            r += 1
         if count >= 2:
-            _freeze_anchor(M1, k, side, w)
-    return R1, M1
+            _freeze_anchor(M1, m, side, w)
+    return R1, I1, M1, MI1
 
 
 @njit(cache=True)
 def _upward_order(I, MI, layer):
-    """(order, top): the manifolds touching something immovable, by (higher
-    layer, lower layer), key order within (a stable sort: deterministic),
-    and the higher layer of each."""
+    """(order, top): the manifolds between two layers (touching something
+    immovable), by (higher layer, lower layer), key order within (a stable
+    sort: deterministic), and the higher layer of each."""
     rank = np.empty(len(MI), np.int64)
     top = np.empty(len(MI), np.int64)
     for k in range(len(MI)):
         la, lb = layer[I[MI[k, FIRST], BODY_A]], layer[I[MI[k, FIRST], BODY_B]]
         top[k], lo = max(la, lb), min(la, lb)
-        rank[k] = UNREACHED if lo == UNREACHED else top[k] * (len(layer) + 1) + lo
+        rank[k] = UNREACHED if (lo == UNREACHED or lo == top[k]) else top[k] * (len(layer) + 1) + lo
     order = np.argsort(rank, kind="mergesort")
     m = 0
     while m < len(order) and rank[order[m]] != UNREACHED:
@@ -159,47 +173,76 @@ def _lever(R, first, count):
 
 
 @njit(cache=True)
-def _velocity_change(vel, omega, a, b, before, lever):
-    """Largest change of either body's contact-point velocity since `before`
-    (v_a, ω_a, v_b, ω_b), m/s."""
+def _point_change(vel, omega, i, before, o, lever):
+    """Largest change of body i's contact-point velocity since before[o:o + 6]
+    (v, ω), m/s."""
     dv = dw = 0.0
-    for i in range(3):
-        dv = max(dv, max(abs(vel[a, i] - before[i]), abs(vel[b, i] - before[6 + i])))
-        dw = max(dw, max(abs(omega[a, i] - before[3 + i]), abs(omega[b, i] - before[9 + i])))
+    for j in range(3):
+        dv = max(dv, abs(vel[i, j] - before[o + j]))
+        dw = max(dw, abs(omega[i, j] - before[o + 3 + j]))
     return dv + dw * lever
 
 
 @njit(cache=True)
-def _update(R1, I, M1, MI, k, vel, omega, before, lever):
-    """One update of manifold k; returns the largest change of a contact-point
-    velocity of its bodies it made (m/s); `lever`: its `_lever`."""
-    first = MI[k, FIRST]
-    a, b = I[first, BODY_A], I[first, BODY_B]
+def _update(R1, I1, M1, MI1, m, vel, omega, lever, tolerance, moved, clock, before):
+    """One update of manifold m; returns the largest change of a contact-point
+    velocity of its bodies it made (m/s). A body whose change reaches
+    `tolerance` is marked moved in sweep `clock`."""
+    first = MI1[m, FIRST]
+    a, b = I1[first, BODY_A], I1[first, BODY_B]
     for i in range(3):
         before[i], before[3 + i] = vel[a, i], omega[a, i]
         before[6 + i], before[9 + i] = vel[b, i], omega[b, i]
-    update_manifold(R1, I, M1, MI, k, vel, omega)
-    return _velocity_change(vel, omega, a, b, before, lever)
+    update_manifold(R1, I1, M1, MI1, m, vel, omega)
+    da = _point_change(vel, omega, a, before, 0, lever)
+    db = _point_change(vel, omega, b, before, 6, lever)
+    if da >= tolerance:
+        moved[a] = clock
+    if db >= tolerance:
+        moved[b] = clock
+    return max(da, db)
 
 
 @njit(cache=True)
-def _settle(R1, I, M1, MI, group, vel, omega, passes, tolerance, before):
-    """Sweeps over one layer's manifolds `group` (the lower layer immovable),
-    up to `passes`, until a sweep changes no contact-point velocity by more
-    than `tolerance` (m/s; ≤ 0: all passes): the layer's bodies then rest on
-    the one below, solved to convergence (a partly converged box on four
-    corners tilts). The test is on velocities, not impulses: four coplanar
-    corners share a load in many ways, so their impulses can keep trading
-    while the body's velocity has long settled."""
-    levers = np.empty(len(group))
-    for m in range(len(group)):
-        levers[m] = _lever(R1, MI[group[m], FIRST], MI[group[m], COUNT])
-    for _ in range(passes):
+def _settle(one_sided, start, stop, vel, omega, passes, tolerance, moved, clock):
+    """Sweeps over one layer's manifolds start..stop (the lower layer
+    immovable), up to `passes`, until a sweep changes no contact-point
+    velocity by more than `tolerance` (m/s; ≤ 0: all passes): the layer's
+    bodies then rest on the one below, solved to convergence (a partly
+    converged box on four corners tilts). After the first sweep, a manifold
+    neither of whose bodies moved (`moved`, by sweep count `clock`) in the
+    sweep before or this one is settled and skipped. The test is on
+    velocities, not impulses: four coplanar corners share a load in many
+    ways, so their impulses can keep trading while the body's velocity has
+    long settled. Returns the sweep count after these sweeps."""
+    R1, I1, M1, MI1 = one_sided
+    levers = np.empty(stop - start)
+    for m in range(start, stop):
+        levers[m - start] = _lever(R1, MI1[m, FIRST], MI1[m, COUNT])
+    before = np.empty(12)
+    for p in range(passes):
+        clock += 1
         change = 0.0
-        for m in range(len(group)):
-            change = max(change, _update(R1, I, M1, MI, group[m], vel, omega, before, levers[m]))
+        for m in range(start, stop):
+            a, b = I1[MI1[m, FIRST], BODY_A], I1[MI1[m, FIRST], BODY_B]
+            if p == 0 or moved[a] >= clock - 1 or moved[b] >= clock - 1:
+                change = max(change, _update(R1, I1, M1, MI1, m, vel, omega, levers[m - start],
+                                             tolerance, moved, clock, before))
         if tolerance > 0.0 and change < tolerance:
-            return
+            break
+    return clock
+
+
+@njit(cache=True)
+def _scatter_impulses(R, M, MI, order, R1, M1, MI1):
+    """The settled λ of the compact rows and anchors back into R and M."""
+    for m in range(len(order)):
+        k = order[m]
+        for j in range(MI[k, COUNT]):
+            for r in range(3):
+                R[MI[k, FIRST] + j, LAM + r] = R1[MI1[m, FIRST] + j, LAM + r]
+        for r in range(3):
+            M[k, M_LAM + r] = M1[m, M_LAM + r]
 
 
 @njit(cache=True)
@@ -211,19 +254,15 @@ def shock_sweep(R, I, M, MI, vel, omega, n, passes, tolerance):
         return 0
     layer = support_layers(R, I, n)
     order, top = _upward_order(I, MI, layer)
-    R1, M1 = _one_sided(R, I, M, MI, layer, order)
-    before = np.empty(12)
+    one_sided = _one_sided(R, I, M, MI, layer, order)
+    moved = np.full(n, -1, np.int64)
+    clock = 0
     g = 0
     while g < len(order):
         e = g + 1
         while e < len(order) and top[e] == top[g]:
             e += 1
-        _settle(R1, I, M1, MI, order[g:e], vel, omega, passes, tolerance, before)
+        clock = _settle(one_sided, g, e, vel, omega, passes, tolerance, moved, clock)
         g = e
-    for c in range(len(R)):
-        for r in range(3):
-            R[c, LAM + r] = R1[c, LAM + r]
-    for k in range(len(MI)):
-        for r in range(3):
-            M[k, M_LAM + r] = M1[k, M_LAM + r]
+    _scatter_impulses(R, M, MI, order, one_sided[0], one_sided[2], one_sided[3])
     return len(order)
