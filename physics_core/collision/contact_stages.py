@@ -101,7 +101,7 @@ def rows_stage(cm, fp, ip, contacts, pos, quat, vel, omega, inv_mass, inv_inerti
     build_rows(R, I, a, b, point, normal, depth, pos, quat, vel, omega, inv_mass, inv_inertia,
                cm.material, cm.mu_static, cm.mu_kinetic, cm.restitution, ip[RULE], h, toi)
     warm_load(R, I, key, warm[0], warm[1], fp[WARM_FRACTION], fp[STATIC_SPEED], v0, w0)
-    M, MI = anchor_rows(R, I, point, pos, quat, inv_inertia)
+    M, MI = anchor_rows(R, I, point, pos, quat, inv_inertia, toi, h)
     return made[0], made[1], M, MI
 
 
