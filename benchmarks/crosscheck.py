@@ -30,18 +30,22 @@ from .results_io import machine, write_json, write_text
 # (not of this run's numbers); quoted under the table.
 MODEL_NOTES = {
     "slide": "PyBullet and MuJoCo are given μ = μ_k, so only their sliding friction is tested. "
-             "A semi-implicit step stops v0 dt / 2 = 6 mm short of the continuous distance in every "
-             "engine; this engine's first step, where the box settles onto the floor, also takes "
-             "1.5 μ_k g dt off the speed instead of 1 (measured; every later step takes exactly μ_k g dt), "
-             "another 6 mm: a defect of the step that creates the contact, not of the friction law.",
+             "A semi-implicit step with a = μ_k g from the first step stops v0 dt / 2 − a dt² f (1 − f) / 2 "
+             "= 6.24 mm short of the continuous distance (f = 0.49, the fraction of a step left when it "
+             "stops); this engine's distance is that one to 3e-11 m: every step, the first included, "
+             "takes μ_k g dt off the speed. The peers' distances are longer by what their contacts lose "
+             "while they form (measured): PyBullet's first steps take 0.15, 0.41, 0.68 μ_k g dt as its "
+             "box sinks into the floor (5.7 mm after 100 steps); MuJoCo's soft contact throws the box "
+             "up at 0.42 m/s in its second step and it slides 20 steps in the air, without friction.",
     "bounce": "MuJoCo has no coefficient of restitution: C_R is mapped to the damping ratio of its "
               f"contact spring, ζ = {ce.mujoco_dampratio(cs.C_R):.4f} (a linear spring–damper's e = "
               "exp(−ζπ/√(1−ζ²))), with solref timeconst "
               f"{ce.mujoco_timeconst(cs.C_R):.3g} s so that the step resolves the spring (with its "
               "default 0.02 s the apex was 0.42 m). PyBullet's bounce comes out 6 % high.",
     "roll": "MuJoCo at condim 3 (condim 6 would add rolling friction, which the closed form has not). "
-            "PyBullet's one sphere–plane point with a hard constraint lands on 5/7 to rounding; this "
-            "engine and MuJoCo end 0.05 % low.",
+            "PyBullet and this engine land on 5/7 to rounding: friction at the contact point keeps the "
+            "angular momentum about it, and both reach that point on the ball's surface. MuJoCo ends "
+            "0.05 % low.",
     "incline_hold": "PyBullet and MuJoCo have one μ; here it is μ_s, so their hold is the same "
                     "Coulomb test as the course's. MuJoCo's contacts are soft: friction holds by "
                     "a regularised force, which creeps.",

@@ -48,9 +48,9 @@ def tangent_frame(R, c, nx, ny, nz):
 
 
 @njit(cache=True)
-def lever_arms(R, c, arm, turn, rx, ry, rz, iw):
-    """r × d_r and I_w⁻¹ (r × d_r) of one body, for the three directions."""
-    for r in range(3):
+def lever_arms(R, c, arm, turn, rx, ry, rz, iw, first, stop):
+    """r × d_r and I_w⁻¹ (r × d_r) of one body, for the directions first..stop − 1."""
+    for r in range(first, stop):
         dx, dy, dz = R[c, DIR + 3 * r], R[c, DIR + 3 * r + 1], R[c, DIR + 3 * r + 2]
         cx, cy, cz = ry * dz - rz * dy, rz * dx - rx * dz, rx * dy - ry * dx
         o = arm + 3 * r
@@ -124,21 +124,65 @@ def pair_restitution(k_a, k_b, e_a, e_b, rule):
 
 
 @njit(cache=True)
+def start_separation(depth, u0_n, rewound, h):
+    """s0, the pair's separation at the start of the substep (module docstring)."""
+    return -depth if rewound else -depth - h * u0_n
+
+
+@njit(cache=True)
+def touch_shift(depth, s0):
+    """How far each side's touching point lies from the midway point, along n
+    (contact_arms): half the overlap the substep's own motion made."""
+    return 0.5 * (depth - max(-s0, 0.0))
+
+
+@njit(cache=True)
+def contact_arms(R, c, i, j, point, depth, pos, vel, omega, iw_a, iw_b, h, rewound):
+    """Lever arms of contact c (its frame already set) from each centre;
+    returns s0, the pair's separation at the start of the substep (module
+    docstring). The normal row's arms reach point[c].
+
+    The friction rows' arms reach where the surfaces touched (COURSE.md 5:
+    the offsets run from each centre to the point where the bodies touch).
+    point[c] lies midway between surfaces that this substep's own motion
+    pushed s_in = depth − max(−s0, 0) into each other (all of depth if they
+    met during the substep, the overlap added since its start if they
+    overlapped already), so each body's touching point is s = s_in / 2 from
+    it: along +n on a, −n on b. A shift along n leaves r × n as it was: the
+    normal rows do not change. On the midway point a ball resting on the
+    floor rolled on a lever g h² / 2 short of its radius (one substep's sag
+    under gravity) and ended 0.049 % under 5/7 v0. Between two moving
+    bodies the two points are 2s apart along n, so friction there turns
+    the pair by 2s λ_t; bodies resting on each other sag together (s = 0),
+    so only a frictional impact between two moving bodies does, by the
+    depth it made within its substep."""
+    px, py, pz = point[c, 0], point[c, 1], point[c, 2]
+    rax, ray, raz = px - pos[i, 0], py - pos[i, 1], pz - pos[i, 2]
+    rbx, rby, rbz = px - pos[j, 0], py - pos[j, 1], pz - pos[j, 2]
+    lever_arms(R, c, ARM_A, TURN_A, rax, ray, raz, iw_a, 0, 1)
+    lever_arms(R, c, ARM_B, TURN_B, rbx, rby, rbz, iw_b, 0, 1)
+    s0 = start_separation(depth, row_velocity(R, c, 0, i, j, vel, omega), rewound, h)
+    s = touch_shift(depth, s0)
+    sx, sy, sz = s * R[c, DIR], s * R[c, DIR + 1], s * R[c, DIR + 2]
+    lever_arms(R, c, ARM_A, TURN_A, rax + sx, ray + sy, raz + sz, iw_a, 1, 3)
+    lever_arms(R, c, ARM_B, TURN_B, rbx - sx, rby - sy, rbz - sz, iw_b, 1, 3)
+    return s0
+
+
+@njit(cache=True)
 def build_rows(R, I, a, b, point, normal, depth, pos, quat, vel, omega, inv_mass, inv_inertia,
                material, mu_static, mu_kinetic, restitution, rule, h, toi):
     """Fill R, I for the k contacts (a, b, point, normal, depth)."""
-    iw = np.empty((3, 3))
+    iw_a, iw_b = np.empty((3, 3)), np.empty((3, 3))
     for c in range(len(a)):
         i, j = a[c], b[c]
         I[c, BODY_A], I[c, BODY_B], I[c, SLIDING] = i, j, 0
         tangent_frame(R, c, normal[c, 0], normal[c, 1], normal[c, 2])
         R[c, INV_MASS_A], R[c, INV_MASS_B] = inv_mass[i], inv_mass[j]
-        world_inverse_inertia(row4(quat, i), inv_inertia[i], iw)
-        lever_arms(R, c, ARM_A, TURN_A, point[c, 0] - pos[i, 0], point[c, 1] - pos[i, 1],
-                   point[c, 2] - pos[i, 2], iw)
-        world_inverse_inertia(row4(quat, j), inv_inertia[j], iw)
-        lever_arms(R, c, ARM_B, TURN_B, point[c, 0] - pos[j, 0], point[c, 1] - pos[j, 1],
-                   point[c, 2] - pos[j, 2], iw)
+        world_inverse_inertia(row4(quat, i), inv_inertia[i], iw_a)
+        world_inverse_inertia(row4(quat, j), inv_inertia[j], iw_b)
+        s0 = contact_arms(R, c, i, j, point, depth[c], pos, vel, omega, iw_a, iw_b, h,
+                          toi[i] >= 0.0 or toi[j] >= 0.0)
         effective_masses(R, c)
         for r in range(3):
             R[c, U0 + r] = row_velocity(R, c, r, i, j, vel, omega)
@@ -148,5 +192,4 @@ def build_rows(R, I, a, b, point, normal, depth, pos, quat, vel, omega, inv_mass
         R[c, MU] = R[c, MU_S]
         R[c, E] = pair_restitution(R[c, K_A], R[c, K_B], restitution[i], restitution[j], rule)
         R[c, DEPTH] = depth[c]
-        s0 = -depth[c] if (toi[i] >= 0.0 or toi[j] >= 0.0) else -depth[c] - h * R[c, U0]
         R[c, BIAS] = -max(s0, 0.0) / h

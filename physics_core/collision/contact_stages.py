@@ -89,17 +89,19 @@ def detect_stage(cm, fp, ip, pos, quat, awake, sleep, cap):
 
 
 @njit(cache=True)
-def rows_stage(cm, fp, ip, contacts, pos, quat, vel, omega, inv_mass, inv_inertia, warm, toi, h):
+def rows_stage(cm, fp, ip, contacts, pos, quat, vel, omega, inv_mass, inv_inertia, warm, toi, h,
+               v0, w0):
     """The contact rows (R, I) of the detected contacts, their impulses loaded
     from the warm cache (applied by restitution_stage), and the manifolds'
-    friction anchors (M, MI) (manifold_friction.py)."""
+    friction anchors (M, MI) (manifold_friction.py); v0, w0 the
+    start-of-substep velocities (a new contact's friction regime)."""
     a, b, point, normal, depth, key = contacts
     made = (np.empty((len(a), NCOL)), np.empty((len(a), ICOL), np.int64))
     R, I = borrow(made)                            # physics_core/borrowed.py
     build_rows(R, I, a, b, point, normal, depth, pos, quat, vel, omega, inv_mass, inv_inertia,
                cm.material, cm.mu_static, cm.mu_kinetic, cm.restitution, ip[RULE], h, toi)
-    warm_load(R, I, key, warm[0], warm[1], fp[WARM_FRACTION], fp[STATIC_SPEED])
-    M, MI = anchor_rows(R, I, point, pos, quat, inv_inertia)
+    warm_load(R, I, key, warm[0], warm[1], fp[WARM_FRACTION], fp[STATIC_SPEED], v0, w0)
+    M, MI = anchor_rows(R, I, point, pos, quat, inv_inertia, toi, h)
     return made[0], made[1], M, MI
 
 

@@ -31,7 +31,7 @@ def _finite(pos, quat, vel, omega):
 
 
 @njit(cache=True)
-def _collide(cm, fp, ip, s, masses, sleep, warm, toi, h, cap):
+def _collide(cm, fp, ip, s, masses, start, sleep, warm, toi, h, cap):
     """collide: detection, waking, rows; (contacts, R, I, M, MI, rows computed)."""
     pos, quat, vel, omega, awake = s
     a, b, point, normal, depth, key, k, woke = detect_stage(cm, fp, ip, pos, quat, awake, sleep,
@@ -40,7 +40,7 @@ def _collide(cm, fp, ip, s, masses, sleep, warm, toi, h, cap):
         solver_masses(cm, awake, masses[0], masses[1])
     contacts = (a, b, point, normal, depth, key)
     R, I, M, MI = rows_stage(cm, fp, ip, borrow(contacts), pos, quat, vel, omega, masses[0],
-                             masses[1], warm, toi, h)
+                             masses[1], warm, toi, h, start[2], start[3])
     return contacts, R, I, M, MI, k
 
 
@@ -90,7 +90,7 @@ def run(cm, fp, ip, s, masses, start, sleep, warm, events, h, dt, first, last, c
         if not _finite(pos, quat, vel, omega):
             return CCD
     t = cycles()
-    made = _collide(cm, fp, ip, s, masses, sleep, warm, toi, h, cap[0])
+    made = _collide(cm, fp, ip, s, masses, start, sleep, warm, toi, h, cap[0])
     rows = borrow(made)
     cap[0] = rows[5] + rows[5] // 8 + 4
     # with no contact and no body moved back, the solve changes no velocity

@@ -12,11 +12,13 @@ friction anchor at the centroid c of its points, three constraint rows:
     r = 0, 1  the tangents t1, t2 at c:  u_r = t_r·(v_b − v_a) + (r_b × t_r)·ω_b − (r_a × t_r)·ω_a
     r = 2     the twist about n:         u_2 = n·(ω_b − ω_a)
 
-(r_a = c − x_a, r_b = c − x_b), solved together with their 3×3 effective
-mass W (W_rs = u_r's change per unit impulse along s). The tangential
-impulse is capped by μ Σλ_n over the whole manifold (μ_s while it holds,
-μ_k against the slip once it slides) and the twist by μ Σλ_n r̄, r̄ the
-mean distance of the points from c. The points keep their normal rows.
+(r_a = c − x_a + s n, r_b = c − x_b − s n, s the points' mean shift to
+where the surfaces touched, contact_build.contact_arms), solved together
+with their 3×3 effective mass W (W_rs = u_r's change per unit impulse
+along s). The tangential impulse is capped by μ Σλ_n over the whole
+manifold (μ_s while it holds, μ_k against the slip once it slides) and
+the twist by μ Σλ_n r̄, r̄ the mean distance of the points from c. The
+points keep their normal rows.
 
 `M` (m, MCOL) float and `MI` (m, MICOL) int hold one row per manifold
 (single-point ones too, so the solver loops over manifolds); a manifold is
@@ -27,8 +29,9 @@ import math
 import numpy as np
 from numba import njit
 
-from .contact_build import world_inverse_inertia
-from .contact_layout import BODY_A, BODY_B, DIR, INV_MASS_A, INV_MASS_B, LAM, MU_K, MU_S, SLIDING
+from .contact_build import start_separation, touch_shift, world_inverse_inertia
+from .contact_layout import (BODY_A, BODY_B, DEPTH, DIR, INV_MASS_A, INV_MASS_B, LAM, MU_K, MU_S,
+                             SLIDING, U0)
 
 # float columns: per row r (3): linear direction L, angular parts for a and b,
 # I_w⁻¹ times them; then the bodies' inverse masses, W⁻¹ (3×3), μ_s, μ_k, r̄, λ (3)
@@ -79,6 +82,16 @@ def _centre(point, first, count):
 
 
 @njit(cache=True)
+def _shift(R, I, first, count, toi, h):
+    """The mean of the points' touch shifts (contact_build.touch_shift)."""
+    s = 0.0
+    for c in range(first, first + count):
+        rewound = toi[I[c, BODY_A]] >= 0.0 or toi[I[c, BODY_B]] >= 0.0
+        s += touch_shift(R[c, DEPTH], start_separation(R[c, DEPTH], R[c, U0], rewound, h))
+    return s / count
+
+
+@njit(cache=True)
 def _body_parts(M, k, ang, turn, normal, rx, ry, rz, iw):
     """Angular parts of one body for the three rows: r × t1, r × t2, n."""
     for r in range(3):
@@ -124,9 +137,10 @@ def _invert(M, k, w):
 
 
 @njit(cache=True)
-def anchor_rows(R, I, point, pos, quat, inv_inertia):
+def anchor_rows(R, I, point, pos, quat, inv_inertia, toi, h):
     """(M, MI) of the contact rows: every manifold's range, and the anchor
-    rows of those with two or more points (the rows' own friction zeroed)."""
+    rows of those with two or more points (the rows' own friction zeroed);
+    toi, h: the bodies' times of impact and the substep (the touch shift)."""
     MI = manifold_ranges(I)
     M = np.zeros((len(MI), MCOL))
     iw_a, iw_b, w = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
@@ -137,6 +151,7 @@ def anchor_rows(R, I, point, pos, quat, inv_inertia):
             continue
         a, b = I[first, BODY_A], I[first, BODY_B]
         cx, cy, cz, rbar = _centre(point, first, count)
+        s = _shift(R, I, first, count, toi, h)
         for i in range(9):
             M[k, L + i] = R[first, DIR + 3 + i] if i < 6 else 0.0
         for i in range(3):
@@ -144,8 +159,10 @@ def anchor_rows(R, I, point, pos, quat, inv_inertia):
         M[k, IMA], M[k, IMB] = R[first, INV_MASS_A], R[first, INV_MASS_B]
         world_inverse_inertia(quat[a], inv_inertia[a], iw_a)
         world_inverse_inertia(quat[b], inv_inertia[b], iw_b)
-        _body_parts(M, k, AA, TA, n, cx - pos[a, 0], cy - pos[a, 1], cz - pos[a, 2], iw_a)
-        _body_parts(M, k, AB, TB, n, cx - pos[b, 0], cy - pos[b, 1], cz - pos[b, 2], iw_b)
+        _body_parts(M, k, AA, TA, n, cx - pos[a, 0] + s * n[0], cy - pos[a, 1] + s * n[1],
+                    cz - pos[a, 2] + s * n[2], iw_a)
+        _body_parts(M, k, AB, TB, n, cx - pos[b, 0] - s * n[0], cy - pos[b, 1] - s * n[1],
+                    cz - pos[b, 2] - s * n[2], iw_b)
         _invert(M, k, w)
         M[k, M_MU_S], M[k, M_MU_K], M[k, RADIUS] = R[first, MU_S], R[first, MU_K], rbar
         _take_row_friction(R, M, k, first, count)

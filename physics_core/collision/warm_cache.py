@@ -5,22 +5,42 @@ order, by one merge pass. The normal impulse is reused as it was; the
 friction impulse is kept as a world vector and projected on the new tangent
 basis, so it survives a change of basis. The contact's slip speed after the
 solve is kept too: it decides static or kinetic friction next substep
-(COURSE.md 5: held while slipping slower than `static_friction_speed`, μ_s;
-sliding with μ_k otherwise; a new contact starts held). The restitution
-pass's extra push is not kept: it belongs to one impact, not to the load.
+(COURSE.md 2 and 5: held while slipping slower than `static_friction_speed`,
+μ_s; sliding with μ_k otherwise). A new contact has no slip of its own yet:
+it slides if its surfaces slip past each other faster than that at the
+start of the substep, before the forces of this substep act (a box that
+lands or is launched sliding is already sliding and takes μ_k from its
+first substep; one set down at rest holds with μ_s, even on an incline
+where this substep's gravity has already given it g sin θ h of slip). The
+restitution pass's extra push is not kept: it belongs to one impact, not to
+the load.
 """
+import math
+
 import numpy as np
 from numba import njit
 
+from .contact_build import row_velocity
 from .contact_data import WARM_COLS, WARM_FRICTION, WARM_NORMAL, WARM_SLIP
-from .contact_layout import DIR, LAM, MU, MU_K, MU_S, SLIDING
+from .contact_layout import BODY_A, BODY_B, DIR, LAM, MU, MU_K, MU_S, SLIDING
 
 
 @njit(cache=True)
-def load_warm(R, I, key, old_key, old, fraction, static_speed):
+def start_slip(R, I, c, vel0, omega0):
+    """|u_t| of row c at the start-of-substep velocities vel0, omega0."""
+    a, b = I[c, BODY_A], I[c, BODY_B]
+    u1 = row_velocity(R, c, 1, a, b, vel0, omega0)
+    u2 = row_velocity(R, c, 2, a, b, vel0, omega0)
+    return math.sqrt(u1 * u1 + u2 * u2)
+
+
+@njit(cache=True)
+def load_warm(R, I, key, old_key, old, fraction, static_speed, vel0, omega0):
     """λ of the rows whose key was seen last substep (× fraction), and each
-    row's friction regime from its last slip speed. old (m, 5): normal
-    impulse, friction impulse (world vector), slip speed per old key."""
+    row's friction regime: from its last slip speed, or for a new contact
+    from its slip at the start-of-substep velocities vel0, omega0. old
+    (m, 5): normal impulse, friction impulse (world vector), slip speed per
+    old key."""
     j = 0
     m = len(old_key)
     for c in range(len(key)):
@@ -34,14 +54,16 @@ def load_warm(R, I, key, old_key, old, fraction, static_speed):
                 R[c, LAM] = old[j, WARM_NORMAL] * fraction
                 R[c, LAM + 1] = (f0 * R[c, DIR + 3] + f1 * R[c, DIR + 4] + f2 * R[c, DIR + 5]) * fraction
                 R[c, LAM + 2] = (f0 * R[c, DIR + 6] + f1 * R[c, DIR + 7] + f2 * R[c, DIR + 8]) * fraction
-        sliding = slip > static_speed      # NaN (a new contact): held
+        if slip != slip:                   # a new contact
+            slip = start_slip(R, I, c, vel0, omega0)
+        sliding = slip > static_speed
         I[c, SLIDING] = 1 if sliding else 0
         R[c, MU] = R[c, MU_K] if sliding else R[c, MU_S]
 
 
 @njit(cache=True)
-def warm_load(R, I, key, cache_keys, cache_values, fraction, static_speed):
-    load_warm(R, I, key, cache_keys[0], cache_values[0], fraction, static_speed)
+def warm_load(R, I, key, cache_keys, cache_values, fraction, static_speed, vel0, omega0):
+    load_warm(R, I, key, cache_keys[0], cache_values[0], fraction, static_speed, vel0, omega0)
 
 
 @njit(cache=True)
