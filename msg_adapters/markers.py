@@ -41,6 +41,12 @@ def body_marker(model, index, pos, quat, stamp_ns, frame_id=WORLD_FRAME):
     m = Marker()
     m.header.stamp = time_msg(stamp_ns)
     m.header.frame_id = frame_id
+    return fill_body_marker(m, model, index, pos, quat)
+
+
+def fill_body_marker(m, model, index, pos, quat):
+    """`m` made body `index`'s marker, its header left as it is: every field
+    that differs between bodies is set."""
     m.ns = model.names[index]
     m.text = model.names[index]
     m.id = int(index)

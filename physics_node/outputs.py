@@ -15,15 +15,16 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
-from visualization_msgs.msg import Marker, MarkerArray
+from visualization_msgs.msg import MarkerArray
 
-from msg_adapters import BodyOdometry, SceneMarkers, body_markers, contact_cloud, pose_array, time_msg
+from msg_adapters import BodyOdometry, SceneMarkers, contact_cloud, pose_array, time_msg
 from msg_adapters.cdr import (
     CdrLayoutError,
     ContactCloudCdr,
     OdometryCdr,
     PoseArrayCdr,
     SceneMarkersCdr,
+    body_markers_cdr,
     clock_cdr,
 )
 
@@ -34,8 +35,11 @@ from .tf_output import TfOutput
 
 
 class Outputs:
-    def __init__(self, node, model, recorder=None, odometry="subscribed"):
+    def __init__(self, node, model, recorder=None, odometry="subscribed", on_demand=False):
+        """`on_demand`: no odometry publisher is made until `add_odometry`
+        (body_topics.py makes them when a subscriber appears)."""
         self.model = model
+        self.on_demand = on_demand
         self.recorder = recorder
         self.recording_error = ""  # why the recording stopped early, if it did
         self._node = node
@@ -48,7 +52,7 @@ class Outputs:
         self.diagnostics = pub(DiagnosticArray, "/diagnostics", STREAM)
         self.tf = TfOutput(pub(TFMessage, "/tf", TF), pub(TFMessage, "/tf_static", TF_STATIC), model)
         self.prefix = {}  # body -> its topics' path under the node when not its name (an entity namespace)
-        self.odom = [self._odom_publisher(name) for name in model.names]
+        self.odom = [None if on_demand else self._odom_publisher(name) for name in model.names]
         self._qos, self._topic = {}, {}
         self._index_publishers()
         self._channels = {}  # publisher -> recording channel id, made on its first message
@@ -73,6 +77,20 @@ class Outputs:
         self._qos.update({p.topic_name: q for p, q in self._all_publishers()})
         self._topic.update({p: p.topic_name for p, _ in self._all_publishers()})
 
+    def add_odometry(self, name):
+        """The odometry publisher of body `name`, made now if it has none
+        (on demand: someone subscribed); served once a poll sees the reader."""
+        i = self.model.index[name]
+        if self.odom[i] is None:
+            self.odom[i] = publisher = self._odom_publisher(name)
+            self._qos[publisher.topic_name] = STREAM
+            self._topic[publisher] = publisher.topic_name
+        return self.odom[i]
+
+    @property
+    def odometry_publishers(self):
+        return sum(1 for p in self.odom if p is not None)
+
     def bodies_changed(self, model):
         """Bodies were spawned or deleted: each body keeps its odometry
         publisher, a new one gets one, a deleted one's is destroyed; the
@@ -80,11 +98,14 @@ class Outputs:
         by_name = dict(zip(self.model.names, self.odom))
         for name in set(by_name) - set(model.names):
             publisher = by_name.pop(name)
+            if publisher is None:
+                continue
             self._topic.pop(publisher, None)
             self._channels.pop(publisher, None)
             self._node.destroy_publisher(publisher)
         self.model = model
-        self.odom = [by_name.get(name) or self._odom_publisher(name) for name in model.names]
+        keep = by_name.get if self.on_demand else lambda name: by_name.get(name) or self._odom_publisher(name)
+        self.odom = [keep(name) for name in model.names]
         self._index_publishers()
         self._build = _state_builder(model, self._node.get_logger())
         self.tf.bodies_changed(model)
@@ -108,15 +129,16 @@ class Outputs:
         size = -(-n // max(int(parts), 1))
         start = self._poll_at
         read = self._odom_read
+        odom = self.odom
         for i in range(start, min(start + size, n)):
-            read[i] = self.odom[i].get_subscription_count() > 0
+            read[i] = odom[i] is not None and odom[i].get_subscription_count() > 0
         self._poll_at = start + size if start + size < n else 0
         self._markers_on = self.markers.get_subscription_count() > 0
         self._update_rows()
 
     def _update_rows(self):
         if self.odometry == "all":
-            self._odom_rows = list(range(len(self.odom)))
+            self._odom_rows = [i for i, p in enumerate(self.odom) if p is not None]
         else:
             self._odom_rows = [i for i, r in enumerate(self._odom_read) if r]
 
@@ -135,7 +157,8 @@ class Outputs:
         yield self.tf.static, TF_STATIC
         yield self.tf.dynamic, TF
         for p in (self.poses, self.contacts, self.markers, self.diagnostics, *self.odom):
-            yield p, STREAM
+            if p is not None:
+                yield p, STREAM
 
     def _send(self, publisher, msg, time_ns, step):
         if self.recorder is None:
@@ -213,15 +236,12 @@ class Outputs:
         in ~/poses, ns and text = its name; after a delete, DELETE markers
         for the ids no longer used, so a viewer drops them) and the static
         bodies' /tf_static."""
-        msg = body_markers(self.model, world.state.pos, world.state.quat, time_ns)
         n = len(self.model.names)
-        for gone in range(n, self._bodies_sent):
-            marker = Marker(action=Marker.DELETE, id=gone, ns=self._body_ns.get(gone, ""))
-            marker.header.stamp = time_msg(time_ns)
-            msg.markers.append(marker)
+        gone = [(i, self._body_ns.get(i, "")) for i in range(n, self._bodies_sent)]
+        data = body_markers_cdr(self.model, world.state.pos, world.state.quat, time_ns, gone)
         self._bodies_sent = n
         self._body_ns = dict(enumerate(self.model.names))
-        self._send(self.bodies, msg, time_ns, step)
+        self._send_cdr(self.bodies, MarkerArray, data, time_ns, step)
         self._send_cdr(self.tf.static, TFMessage, self.tf.build_static(world.state, time_ns), time_ns, step)
 
     def record_request(self, topic, msg, time_ns, step):
@@ -273,18 +293,37 @@ def _state_builder(model, logger):
         poses = PoseArrayCdr(len(model.names))
         odometry = OdometryCdr(model.names)
         cloud = ContactCloudCdr()
-        scene_markers = SceneMarkersCdr(model, capacity=max(64, 4 * len(model.names)))
     except CdrLayoutError as exc:
         logger.warning(f"per-step messages go through rclpy's serializer: {exc}")
         return _serialized_state_builder(model)
+    markers_builder = _markers_builder(model, logger)
 
     def build(s, contacts, time_ns, odom_rows, markers):
         datas = [poses.build(s.pos, s.quat, time_ns), cloud.build(contacts, time_ns)]
         if odom_rows:
             datas += odometry.build(s.pos, s.quat, s.vel, s.omega, time_ns, odom_rows)
         if markers:
-            datas.append(scene_markers.build(s.pos, s.quat, contacts, time_ns))
+            datas.append(markers_builder(s.pos, s.quat, contacts, time_ns))
         return datas
+
+    return build
+
+
+def _markers_builder(model, logger):
+    """`build(pos, quat, contacts, time_ns)` -> the CDR of ~/markers, laid out
+    when first asked for (someone subscribed): 10,000 bodies' markers take
+    1.5 s to lay out, and most sessions never draw them."""
+    made = []
+
+    def build(pos, quat, contacts, time_ns):
+        if not made:
+            try:
+                made.append(SceneMarkersCdr(model, capacity=max(64, 4 * len(model.names))).build)
+            except CdrLayoutError as exc:
+                logger.warning(f"~/markers goes through rclpy's serializer: {exc}")
+                objects = SceneMarkers(model)
+                made.append(lambda *args: serialize_message(objects.build(*args)))
+        return made[0](pos, quat, contacts, time_ns)
 
     return build
 
