@@ -5,7 +5,6 @@ The node only translates between ROS and the engine; the step boundary lives
 in `stepping.py`, message shapes in `msg_adapters`, the file in `recorder.py`.
 """
 
-import os
 import time
 import warnings
 
@@ -41,8 +40,7 @@ from .outputs import Outputs
 from .pacing import StepPacer
 from .parameters import ParameterValueError, coerce, declare
 from .qos import SERVICES
-from .recorder import INTEGRATION_METADATA, SCENE_MEDIA_TYPE, SESSION_METADATA, Recorder, chunk_size_for
-from .session import engine_version, integration_metadata, session_metadata
+from .recording_control import RecordingControl
 from .sim_actions import SimulateStepsServer
 from .sim_services import SimServices
 from .stepping import Stepper
@@ -91,29 +89,31 @@ class PhysicsNode(Node):
         self._last_warning = {}
         self.unknown_bodies = UnknownBodyTopics(self, self.model.names, self._drop)
 
-        self.recorder = None
-        if self.settings.record:
-            try:
-                self.recorder = Recorder(
-                    self.settings.record,
-                    chunk_size=chunk_size_for(len(self.model.names)),
-                    library=f"physics_node {engine_version()}",
-                ).open()
-            except OSError as exc:
-                why = exc.strerror or exc
-                raise ParameterValueError(f"record: cannot write {self.settings.record!r}: {why}") from None
+        self.recording = RecordingControl(self)
+        self._pending_record = None  # a file opened by a `record` value being set
+        first = self.recording.open(self.settings.record) if self.settings.record else None
         try:
-            self._connect()
+            self._connect(first)
         except BaseException:
+            if first is not None and self.recording.recorder is None:
+                first.close()
             self.close()  # a half-built node still leaves a readable file
             raise
 
-    def _connect(self):
+    @property
+    def recorder(self):
+        """The Recorder in use, or None."""
+        return self.recording.recorder
+
+    def _connect(self, recorder):
         """Publishers, subscriptions, services and timers; first outputs."""
-        sink = self.recorder if self.foxglove is None else self.foxglove.attach(self, self.recorder)
-        self.outputs = Outputs(self, self.model, sink, odometry=self.settings.odometry, on_demand=self.on_demand)
-        if self.recorder is not None:
-            self._start_recording()
+        sink = None if self.foxglove is None else self.foxglove.attach(self, None)
+        self.outputs = Outputs(
+            self, self.model, sink, odometry=self.settings.odometry, on_demand=self.on_demand,
+            history=self.recording.history, on_record_error=self.recording.failed,
+        )
+        if recorder is not None:
+            self.recording.start(recorder, mid_session=False)
         self.body_topics = BodyTopics(self, self.outputs, self._command_callback, on_demand=self.on_demand)
         self.body_topics.add(self.model.names)
 
@@ -147,28 +147,21 @@ class PhysicsNode(Node):
         self.outputs.send_state(self.world, t0, self.world.step_index)
 
     # -- recording ----------------------------------------------------------
-    def _start_recording(self):
-        name = os.path.basename(self.scene_path) or "scene.yaml"
-        text = self.model.source_text
-        self.recorder.add_attachment(name, text.encode(), SCENE_MEDIA_TYPE)
-        self.recorder.add_metadata(
-            SESSION_METADATA, session_metadata(self.settings, self.scene_path, self.world, self.get_fully_qualified_name())
-        )
-
     def close(self):
         """Finish the recording, if any, and stop serving Foxglove. Called on every exit path."""
         if getattr(self, "sim_actions", None) is not None:
             self.sim_actions.close()
             self.sim_actions = None
-        if self.recorder is not None:
-            try:
-                stats = integration_metadata(self.world)
-                if stats and self.recorder.is_open:
-                    self.recorder.add_metadata(INTEGRATION_METADATA, stats)
-            finally:
-                self.recorder.close()
+        self._discard_pending_record()
+        if getattr(self, "recording", None) is not None:
+            self.recording.stop()
         if self.foxglove is not None:
             self.foxglove.close()
+
+    def _discard_pending_record(self):
+        pending, self._pending_record = getattr(self, "_pending_record", None), None
+        if pending is not None:
+            pending.close()
 
     # -- stepping -----------------------------------------------------------
     def _on_tick(self):
@@ -325,6 +318,17 @@ class PhysicsNode(Node):
             if p.name == "odometry" and p.value == "all" and self.on_demand:
                 reason = _ALL_ODOMETRY_ON_DEMAND.format(n=len(self.model.names), s=self.settings)
                 return SetParametersResult(successful=False, reason=reason)
+        return self._check_record([p.value for p in params if p.name == "record"])
+
+    def _check_record(self, paths):
+        """A new `record` path is opened here, once every other value passed,
+        so that a path --record would refuse is refused the same way."""
+        self._discard_pending_record()
+        if paths and paths[-1]:
+            try:
+                self._pending_record = self.recording.open(paths[-1])
+            except ParameterValueError as exc:
+                return SetParametersResult(successful=False, reason=str(exc))
         return SetParametersResult(successful=True)
 
     def _apply_parameters(self, params):
@@ -342,6 +346,12 @@ class PhysicsNode(Node):
                 self.stepper.command_timeout = value
             elif p.name == "odometry":
                 self.outputs.set_odometry(value)
+            elif p.name == "record":
+                pending, self._pending_record = self._pending_record, None
+                if pending is not None:
+                    self.recording.start(pending)
+                else:
+                    self.recording.stop()
 
     # -- diagnostics ------------------------------------------------------------
     def _on_diagnostics(self):
@@ -351,8 +361,8 @@ class PhysicsNode(Node):
             paused=self.paused,
             fault=self.faulted,
             target_rtf=self.settings.real_time_factor,
-            recording=self.recorder.path if self.recorder else "",
-            recording_error=self.outputs.recording_error,
+            recording=self.recording.path,
+            recording_error=self.recording.error,
             isolated=self.stepper.isolated,
             queued=self.stepper.pending,
             unknown_topics=(len(self.unknown_bodies.subscriptions), len(self.unknown_bodies.ignored)),

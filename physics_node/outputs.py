@@ -17,7 +17,7 @@ from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import MarkerArray
 
-from msg_adapters import BodyOdometry, SceneMarkers, contact_cloud, pose_array, time_msg
+from msg_adapters import BodyOdometry, SceneMarkers, contact_cloud, pose_array, sim_time_ns, time_msg
 from msg_adapters.cdr import (
     CdrLayoutError,
     ContactCloudCdr,
@@ -28,20 +28,27 @@ from msg_adapters.cdr import (
     clock_cdr,
 )
 
-from .limits import excerpt
 from .qos import COMMANDS, LATCHED, STREAM, TF, TF_STATIC, per_body_events
 from .recorder import EVENTS_SUFFIX, ISOLATE_EVENT, RESET_EVENT, RecorderError
 from .tf_output import TfOutput
 
 
 class Outputs:
-    def __init__(self, node, model, recorder=None, odometry="subscribed", on_demand=False):
-        """`on_demand`: no odometry publisher is made until `add_odometry`
-        (body_topics.py makes them when a subscriber appears)."""
+    def __init__(self, node, model, recorder=None, odometry="subscribed", on_demand=False, history=None,
+                 on_record_error=None):
+        """`recorder`: a Recorder, the Foxglove tap (which records into one
+        it is given), or None. `on_demand`: no odometry publisher is made
+        until `add_odometry` (body_topics.py makes them when a subscriber
+        appears). `history` (session_history.py) keeps every command, request
+        and event, recorded or not; `on_record_error(exc)` is told of a
+        write error (recording_control.py)."""
         self.model = model
         self.on_demand = on_demand
         self.recorder = recorder
-        self.recording_error = ""  # why the recording stopped early, if it did
+        self._tap = recorder if hasattr(recorder, "set_recorder") else None
+        self.history = history
+        self._on_record_error = on_record_error
+        self._latched_sent = {}  # latched publisher -> (msg class, CDR) last sent, for a recording started later
         self._node = node
         pub = node.create_publisher
         self.clock = pub(Clock, "/clock", LATCHED)
@@ -169,6 +176,8 @@ class Outputs:
     def _send_cdr(self, publisher, msg_class, data, time_ns, step):
         """Publish (and record) a message already serialized."""
         publisher.publish(data)
+        if publisher is self.clock or publisher is self.bodies or publisher is self.tf.static:
+            self._latched_sent[publisher] = (msg_class, data)
         if self.recorder is not None:
             topic = self._topic[publisher]
             self._record(self.recorder.write, topic, msg_class, data, time_ns, step, self._qos[topic])
@@ -179,22 +188,29 @@ class Outputs:
         try:
             write(*args)
         except (RecorderError, OSError) as exc:
-            self._recording_failed(exc)
+            if self._on_record_error is None:
+                raise
+            self._on_record_error(exc)
 
-    def _recording_failed(self, exc):
-        recorder, self.recorder = self.recorder, None
-        if recorder is None:
+    def set_recorder(self, recorder):
+        """Record into `recorder` from now on (None: stop recording); the
+        Foxglove tap, if any, keeps serving."""
+        if self._tap is not None:
+            self._tap.set_recorder(recorder)
+        else:
+            self.recorder = recorder
+        self._channels = {}  # channel ids are the old recorder's
+
+    def record_latched(self, time_s, step):
+        """The latched messages as last sent (/clock, ~/bodies, /tf_static)
+        into the recording, at sim time `time_s`: a recording started
+        mid-session has them from its start, as a late subscriber gets them."""
+        if self.recorder is None:
             return
-        cause = exc.__cause__ or exc
-        self.recording_error = f"recording {recorder.path} stopped: {excerpt(cause, 300)}"
-        try:
-            recorder.close()  # the file ends with the last chunk written
-        except (RecorderError, OSError):
-            pass
-        self._node.get_logger().error(
-            f"{self.recording_error}; the simulation goes on unrecorded "
-            f"(`physics-replay {recorder.path} --recover OUT.mcap` reads what was written)"
-        )
+        time_ns = sim_time_ns(time_s)
+        for publisher, (msg_class, data) in list(self._latched_sent.items()):
+            topic = self._topic[publisher]
+            self._record(self.recorder.write, topic, msg_class, data, time_ns, step, self._qos[topic])
 
     # -- per step ----------------------------------------------------------
     def send_clock(self, time_ns, step):
@@ -246,8 +262,14 @@ class Outputs:
 
     def record_request(self, topic, msg, time_ns, step):
         """A simulator-standard request as received, for --resimulate."""
+        self._keep(topic, type(msg), serialize_message(msg), time_ns, step, COMMANDS)
+
+    def _keep(self, topic, msg_class, data, time_ns, step, qos):
+        """A message --resimulate needs: into the history and the recording."""
+        if self.history is not None:
+            self.history.add(topic, msg_class, data, time_ns, step, qos)
         if self.recorder is not None:
-            self._record(self.recorder.write, topic, type(msg), serialize_message(msg), time_ns, step, COMMANDS)
+            self._record(self.recorder.write, topic, msg_class, data, time_ns, step, qos)
 
     def send_diagnostics(self, msg, time_ns, step):
         self._send(self.diagnostics, msg, time_ns, step)
@@ -257,7 +279,7 @@ class Outputs:
         """An applied command, at the sim time and index of the step that
         applied it. Commands the node made itself (a wrench timing out) are
         recorded as the zero WrenchStamped they amount to."""
-        if self.recorder is None:
+        if self.recorder is None and self.history is None:
             return
         data = command.raw
         if not data:
@@ -266,7 +288,7 @@ class Outputs:
             msg.header.frame_id = command.frame
             data = serialize_message(msg)
         topic = command.topic or f"{self._node.get_fully_qualified_name()}/{command.body}/wrench"
-        self._record(self.recorder.write, topic, WrenchStamped, data, time_ns, step, COMMANDS)
+        self._keep(topic, WrenchStamped, data, time_ns, step, COMMANDS)
 
     def record_reset(self, time_ns, step):
         self._record_event(RESET_EVENT, time_ns, step)
@@ -276,10 +298,9 @@ class Outputs:
         self._record_event(f"{ISOLATE_EVENT} {','.join(names)}", time_ns, step)
 
     def _record_event(self, text, time_ns, step):
-        if self.recorder is None:
+        if self.recorder is None and self.history is None:
             return
-        data = serialize_message(String(data=text))
-        self._record(self.recorder.write, self.events_topic, String, data, time_ns, step, STREAM)
+        self._keep(self.events_topic, String, serialize_message(String(data=text)), time_ns, step, STREAM)
 
 
 def _state_builder(model, logger):

@@ -18,7 +18,12 @@ from .body_topics import ON_DEMAND_ABOVE
 PARAMETERS = {
     "scene": ("", "scene YAML path; empty = the built-in default scene", False),
     "real_time_factor": (1.0, "sim seconds per wall second; 0 = as fast as possible", True),
-    "record": ("", "MCAP file to record the session to; empty = no recording", False),
+    "record": (
+        "",
+        "MCAP file to record the session to; empty = no recording. Set while running: the recording so far is "
+        "closed and this file started (empty: recording stops)",
+        True,
+    ),
     "duration": (0.0, "sim seconds to run, then exit; 0 = until stopped", False),
     "publish_every": (1, "publish poses, odometry, contacts and markers every N steps", True),
     "paused": (False, "start (or hold) the simulation paused", True),
