@@ -439,19 +439,19 @@ def run(quick=False, out_dir=None, seconds=None, only=None, listener=True, execu
                               f"record {row['record_mean_ms']:.3f}) of {row['dt_ms']:.3f} ms")
     add_overheads(rows)
     if out_dir:
-        kept = _rows_not_run(out_dir, rows) if only else []
+        kept = _rows_not_run(out_dir, rows, only)
         data = {"quick": quick, "seconds": seconds, "machine": machine(), "rows": kept + rows}
         write_json(out_dir, "node_realtime.json", data)
         write_text(out_dir, "node_realtime.md", markdown(_in_case_order(kept + rows), seconds, machine()))
     return rows
 
 
-def _rows_not_run(out_dir, rows):
+def _rows_not_run(out_dir, rows, only):
     """The rows of the results already in `out_dir` whose case was not run now
     (`--only` replaces the rows of the cases it names and keeps the rest)."""
     import json
     path = os.path.join(out_dir, "node_realtime.json")
-    if not os.path.exists(path):
+    if not only or not os.path.exists(path):
         return []
     with open(path, encoding="utf-8") as f:
         old = json.load(f).get("rows", [])

@@ -442,9 +442,11 @@ def _marker_kind(m, start):
     offsets, _ = layout(m if start == 0 else MarkerArray(markers=[m]))
     shift = 0 if start == 0 else 4
     at = dict(zip(_BODY_FIELDS, (offsets[(() if start == 0 else ("markers", 0)) + f] - shift for f in _BODY_FIELDS)))
-    if (at[("id",)] + 4 != at[("type",)] or at[("pose", "orientation", "w")] != at[("pose", "position", "x")] + 48
-            or at[("scale", "z")] != at[("scale", "x")] + 16 or at[("color", "a")] != at[("color", "r")] + 12
-            or (start + at[("pose", "position", "x")]) % 8 or (start + at[("scale", "x")]) % 8):
+    # id and type: two int32; pose: 7 doubles; scale: 3 doubles; colour: 4 float32, each run unbroken
+    runs = ((("id",), ("type",), 4), (("pose", "position", "x"), ("pose", "orientation", "w"), 48),
+            (("scale", "x"), ("scale", "z"), 16), (("color", "r"), ("color", "a"), 12))
+    aligned = (start + at[("pose", "position", "x")]) % 8 == 0 == (start + at[("scale", "x")]) % 8
+    if not aligned or any(at[last] != at[first] + span for first, last, span in runs):
         raise CdrLayoutError("Marker: id, pose, scale or colour not packed as assumed")
     return data, at
 

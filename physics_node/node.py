@@ -309,16 +309,22 @@ class PhysicsNode(Node):
     # -- parameters -------------------------------------------------------------
     def _check_parameters(self, params):
         for p in params:
-            try:
-                coerce(p.name, p.value)
-            except ParameterValueError as exc:
-                return SetParametersResult(successful=False, reason=str(exc))
-            if p.name == "paused" and p.value is False and self.faulted:
-                return SetParametersResult(successful=False, reason=f"{self.faulted}; call reset_simulation first")
-            if p.name == "odometry" and p.value == "all" and self.on_demand:
-                reason = _ALL_ODOMETRY_ON_DEMAND.format(n=len(self.model.names), s=self.settings)
+            reason = self._refusal(p)
+            if reason:
                 return SetParametersResult(successful=False, reason=reason)
         return self._check_record([p.value for p in params if p.name == "record"])
+
+    def _refusal(self, p):
+        """Why the value of parameter `p` cannot be taken now, or None."""
+        try:
+            coerce(p.name, p.value)
+        except ParameterValueError as exc:
+            return str(exc)
+        if p.name == "paused" and p.value is False and self.faulted:
+            return f"{self.faulted}; call reset_simulation first"
+        if p.name == "odometry" and p.value == "all" and self.on_demand:
+            return _ALL_ODOMETRY_ON_DEMAND.format(n=len(self.model.names), s=self.settings)
+        return None
 
     def _check_record(self, paths):
         """A new `record` path is opened here, once every other value passed,

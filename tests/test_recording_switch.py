@@ -175,7 +175,6 @@ def test_record_set_to_nothing_stops_and_a_new_file_starts_after_a_write_fault(t
         run_until(driver, sim_time(driver) + int(0.3e9), "stepping into B")
         (result,) = set_param(driver, record="")
         assert result.successful, result.reason
-        values = diagnostic_values(driver.received["/diagnostics"][-1])
         driver.spin_until(lambda: diagnostic_values(driver.received["/diagnostics"][-1])["recording"] == "",
                           10.0, "no recording in /diagnostics")
         assert proc.poll() is None, log_path.read_text(errors="replace")[-3000:]
@@ -190,4 +189,3 @@ def test_record_set_to_nothing_stops_and_a_new_file_starts_after_a_write_fault(t
     assert "Traceback" not in log_path.read_text(errors="replace")
     assert_opens_in_both_readers(b)
     assert_resimulates(b)
-    del values
