@@ -129,6 +129,26 @@ def test_odometry_is_served_once_subscribed_and_a_wrench_once_published(large):
     assert values["body_topics"] == "2" and values["body_topics_on_demand"] == str(3 * BODIES - 2)
 
 
+def test_a_spawned_body_gets_its_topics_on_demand_and_a_deleted_one_loses_them(large):
+    from simulation_interfaces import srv
+    from simulation_interfaces.msg import Result
+
+    node, driver = large
+    request = srv.SpawnEntity.Request(name="late", entity_namespace="team")
+    request.resource_string = f"shape: {{type: sphere, radius: 0.1}}\nmass: {MASS}\n"
+    request.initial_pose.pose.position.x = -5.0
+    reply = driver.call(srv.SpawnEntity, "/physics/spawn_entity", request=request)
+    assert reply.result.result == Result.RESULT_OK, reply.result.error_message
+    topic = "/physics/team/late/odom"
+    assert not [t for t in node_topics(driver) if "/late/" in t]  # nothing made before a peer asks
+    odom = driver.listen(Odometry, topic)
+    driver.spin_until(lambda: odom, 20.0, f"{topic} made on demand")
+    assert state_from_odometry(odom[-1])[0][0] == -5.0
+    reply = driver.call(srv.DeleteEntity, "/physics/delete_entity", request=srv.DeleteEntity.Request(entity="late"))
+    assert reply.result.result == Result.RESULT_OK, reply.result.error_message
+    driver.spin_until(lambda: topic not in node_topics(driver), 10.0, f"{topic} gone with its body")
+
+
 def test_odometry_all_is_refused_with_a_reason_on_a_large_world(large):
     from rcl_interfaces.srv import SetParameters
     from rclpy.parameter import Parameter
