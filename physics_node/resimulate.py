@@ -4,6 +4,11 @@ The world is loaded from the scene attached to the recording; each recorded
 command is submitted at the step index it was applied at (the message's
 `sequence`), through the same `Stepper` the node uses. Every recorded
 PoseArray is then compared with the recomputed state bit for bit.
+
+A recording started mid-session (`record` set while the node ran) carries
+the node's history since its last reset as an attached MCAP
+(session_history.py); that is re-applied first, so the world reaches the
+recording's first step exactly as the node had it.
 """
 
 import json
