@@ -106,6 +106,8 @@ CASES = (
     # every body's odometry topic served each step, read or not
     Case("100 @ 1 kHz, free, odometry all", 100, 0.001, "free", "all"),
     Case("1000 @ 240 Hz, free, odometry all", 1000, 1.0 / 240.0, "free", "all"),
+    # a large world: its bodies' topics are made on demand (physics_node/body_topics.py)
+    Case("10000 @ 60 Hz, contacts", 10_000, 1.0 / 60.0, "contacts"),
 )
 
 
@@ -313,13 +315,16 @@ def measure(case, record, seconds, workdir, listener=True, executor="events"):
     rclpy.init()
     node = executor = watcher = None
     try:
+        start = time.monotonic()
         node = PhysicsNode(parameter_overrides=[
             Parameter("scene", Parameter.Type.STRING, scene_path),
             Parameter("real_time_factor", Parameter.Type.DOUBLE, 1.0),
             Parameter("record", Parameter.Type.STRING, record_path),
             Parameter("publish_every", Parameter.Type.INTEGER, 1),
             Parameter("odometry", Parameter.Type.STRING, case.odometry),
+            Parameter("max_bodies", Parameter.Type.INTEGER, max(10_000, case.bodies + 1)),  # the ground too
         ])
+        start_s = time.monotonic() - start
         if case.scene == "contacts_sleep":
             # Let the spheres land and fall asleep before the node runs, so
             # the window shows the scene at rest whatever rate the node holds.
@@ -365,9 +370,11 @@ def measure(case, record, seconds, workdir, listener=True, executor="events"):
     finally:
         if watcher is not None:
             watcher.finish()
+        stop = time.monotonic()
         if node is not None:
             node.close()
             node.destroy_node()
+        stop_s = time.monotonic() - stop
         if executor is not None:
             executor.shutdown()
         rclpy.try_shutdown()
@@ -404,6 +411,8 @@ def measure(case, record, seconds, workdir, listener=True, executor="events"):
     row["recording_kb_per_step"] = size / 1e3 / max(steps_total, 1) if size is not None else None
     row["recorded_messages"] = messages
     row["load_average"] = os.getloadavg()[0]
+    row["node_start_s"], row["node_stop_s"] = start_s, stop_s
+    row["seconds"] = seconds
     return row
 
 
@@ -430,10 +439,29 @@ def run(quick=False, out_dir=None, seconds=None, only=None, listener=True, execu
                               f"record {row['record_mean_ms']:.3f}) of {row['dt_ms']:.3f} ms")
     add_overheads(rows)
     if out_dir:
-        data = {"quick": quick, "seconds": seconds, "machine": machine(), "rows": rows}
+        kept = _rows_not_run(out_dir, rows, only)
+        data = {"quick": quick, "seconds": seconds, "machine": machine(), "rows": kept + rows}
         write_json(out_dir, "node_realtime.json", data)
-        write_text(out_dir, "node_realtime.md", markdown(rows, seconds, machine()))
+        write_text(out_dir, "node_realtime.md", markdown(_in_case_order(kept + rows), seconds, machine()))
     return rows
+
+
+def _rows_not_run(out_dir, rows, only):
+    """The rows of the results already in `out_dir` whose case was not run now
+    (`--only` replaces the rows of the cases it names and keeps the rest)."""
+    import json
+    path = os.path.join(out_dir, "node_realtime.json")
+    if not only or not os.path.exists(path):
+        return []
+    with open(path, encoding="utf-8") as f:
+        old = json.load(f).get("rows", [])
+    ran = {(r["case"], r.get("executor")) for r in rows}
+    return [r for r in old if (r["case"], r.get("executor")) not in ran]
+
+
+def _in_case_order(rows):
+    order = {c.name: i for i, c in enumerate(CASES)}
+    return sorted(rows, key=lambda r: (order.get(r["case"], len(order)), r.get("executor") or "", r["record"]))
 
 
 def add_overheads(rows):
@@ -479,7 +507,7 @@ def markdown(rows, seconds, machine_line):
     from .markdown import table
     wall_header = ["case", "record", "real-time factor", "poses received (Hz)", "step mean / p99",
                    "engine mean / p99", "publish mean / p99", "record mean / p99", "budget dt",
-                   "in steps", "CPU", "load"]
+                   "in steps", "CPU", "load", "node start / stop (s)"]
     wall = []
     for r in rows:
         wall.append([
@@ -490,6 +518,7 @@ def markdown(rows, seconds, machine_line):
             f"{_f(r['record_mean_ms'])} / {_f(r['record_p99_ms'])}" if r["record"] else "—",
             _f(r["dt_ms"]), f"{100 * r['busy_share']:.0f} %", f"{100 * r['cpu_share']:.0f} %",
             _f(r.get("load_average"), 1),
+            f"{_f(r.get('node_start_s'), 2)} / {_f(r.get('node_stop_s'), 2)}",
         ])
     cpu_header = ["case", "record", "step", "engine", "publish", "messages", "per message (µs)", "record",
                   "record share of step", "recording overhead (of step / of dt)", "writer thread",
@@ -513,9 +542,11 @@ def markdown(rows, seconds, machine_line):
     align = "ll" + "r" * 20
     lines = [
         "# Node real time: step, publish and recording cost", "",
-        f"Machine: {machine_line}. Each row: {seconds:g} s of wall time at real_time_factor 1, every output "
-        "someone reads published every step, after a warm-up. Regenerate with `physics-bench node` "
-        "(`--quick`: 5 s per row).",
+        f"Machine: {machine_line}. Each row: {seconds:g} s of wall time at real_time_factor 1 (a row kept "
+        "from an earlier run with `--only` has its own), every output someone reads published every step, "
+        "after a warm-up. Node start = constructing PhysicsNode (scene load, world, topics, first outputs; "
+        "not the imports), stop = closing and destroying it. Regenerate with `physics-bench node` "
+        "(`--quick`: 5 s per row; `--only CASE`: those rows, the others kept).",
         "", "## Real time (wall clock, ms)", "",
         table(wall_header, wall, align=align[: len(wall_header)]),
         "## Cost per step (CPU time of the node's thread, mean, ms)", "",

@@ -41,34 +41,42 @@ def body_marker(model, index, pos, quat, stamp_ns, frame_id=WORLD_FRAME):
     m = Marker()
     m.header.stamp = time_msg(stamp_ns)
     m.header.frame_id = frame_id
+    return fill_body_marker(m, model, index, pos, quat)
+
+
+def fill_body_marker(m, model, index, pos, quat):
+    """`m` made body `index`'s marker, its header left as it is: every field
+    that differs between bodies is set."""
     m.ns = model.names[index]
     m.text = model.names[index]
     m.id = int(index)
     m.action = Marker.ADD
+    m.type, scale, p, q = body_marker_shape(model, index, pos, quat)
+    m.scale.x, m.scale.y, m.scale.z = scale
+    _set_pose(m, p, q)
+    _set_rgba(m, body_marker_rgba(model, index))
+    return m
+
+
+def body_marker_shape(model, index, pos, quat):
+    """(Marker type, scale (x, y, z), position, orientation w, x, y, z) of body `index`."""
     shape = int(model.shape_type[index])
     if shape == SPHERE_SHAPE:
-        m.type = Marker.SPHERE
         d = 2.0 * float(model.radius[index])
-        m.scale.x = m.scale.y = m.scale.z = d
-        _set_pose(m, pos[index], quat[index])
-    elif shape == BOX_SHAPE:
-        m.type = Marker.CUBE
-        m.scale.x, m.scale.y, m.scale.z = (2.0 * float(h) for h in model.half_extents[index])
-        _set_pose(m, pos[index], quat[index])
-    else:
-        m.type = Marker.CUBE
-        m.scale.x = m.scale.y = PLANE_DRAW_SIZE
-        m.scale.z = PLANE_DRAW_THICKNESS
-        normal = np.asarray(model.plane_normal[index], dtype=np.float64)
-        normal = normal / np.linalg.norm(normal)
-        # The slab's top face lies on the plane n·x = offset.
-        centre = normal * (float(model.plane_offset[index]) - 0.5 * PLANE_DRAW_THICKNESS)
-        _set_pose(m, centre, quat_between_z_and(normal))
+        return Marker.SPHERE, (d, d, d), pos[index], quat[index]
+    if shape == BOX_SHAPE:
+        return Marker.CUBE, tuple(2.0 * float(h) for h in model.half_extents[index]), pos[index], quat[index]
+    normal = np.asarray(model.plane_normal[index], dtype=np.float64)
+    normal = normal / np.linalg.norm(normal)
+    # The slab's top face lies on the plane n·x = offset.
+    centre = normal * (float(model.plane_offset[index]) - 0.5 * PLANE_DRAW_THICKNESS)
+    return Marker.CUBE, (PLANE_DRAW_SIZE, PLANE_DRAW_SIZE, PLANE_DRAW_THICKNESS), centre, quat_between_z_and(normal)
+
+
+def body_marker_rgba(model, index):
     if bool(model.is_static[index]):
-        _set_rgba(m, _STATIC_RGBA)
-    else:
-        _set_rgba(m, _PALETTE[index % len(_PALETTE)] + (1.0,))
-    return m
+        return _STATIC_RGBA
+    return _PALETTE[index % len(_PALETTE)] + (1.0,)
 
 
 def body_markers(model, pos, quat, stamp_ns, frame_id=WORLD_FRAME):

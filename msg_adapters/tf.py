@@ -11,7 +11,7 @@ import numpy as np
 from geometry_msgs.msg import TransformStamped
 from tf2_msgs.msg import TFMessage
 
-from .cdr import _ros_pose_rows, _Slots, _split_stamp
+from .cdr import HEADER_BYTES, CdrLayoutError, _align, _ros_pose_rows, _split_stamp, packed_sequence
 from .frames import WORLD_FRAME
 from .stamps import time_msg
 
@@ -38,19 +38,35 @@ class TransformsCdr:
     def __init__(self, names, frame_id=WORLD_FRAME):
         self.names = tuple(names)
         n = len(self.names)
-        template = transforms_message(self.names, np.zeros((n, 3)), np.tile([1.0, 0, 0, 0], (n, 1)), 0, frame_id)
-        self._slots = s = _Slots([template])
-        self._stamps = np.array([s.stamp_index(0, ("transforms", i, "header")) for i in range(n)], dtype=np.int64)
-        first = [s.index(0, ("transforms", i, "transform", "translation", "x"), 8) for i in range(n)]
+        data, at = packed_sequence(TFMessage, self._items(frame_id), _PATHS)
+        # the message starts 4 bytes before a multiple of 8, so its CDR origin is on one
+        self._store = store = np.zeros(_align(len(data) + 4, 8), dtype=np.uint8)
+        store[4 : 4 + len(data)] = np.frombuffer(data, dtype=np.uint8)
+        self._end = 4 + len(data)
+        self._i32, self._u32, self._f64 = store.view(np.int32), store.view(np.uint32), store.view(np.float64)
+        origin = 4 + HEADER_BYTES
+        if np.any((origin + at[:, 1]) % 8) or np.any(at[:, 2] != at[:, 1] + 48):
+            raise CdrLayoutError("TFMessage: a transform is not seven 8-byte aligned doubles in a row")
+        self._stamps = (origin + at[:, 0]) // 4
         # translation (x, y, z) then rotation (x, y, z, w): seven doubles in a row
-        self._rows = np.array(first, dtype=np.int64)[:, None] + np.arange(7)
+        self._rows = ((origin + at[:, 1]) // 8)[:, None] + np.arange(7)
         self._scratch = np.empty((n, 7))
 
+    def _items(self, frame_id):
+        t = TransformStamped()
+        t.header.frame_id = frame_id
+        t.transform.rotation.w = 1.0
+        for name in self.names:
+            t.child_frame_id = name
+            yield t, len(name.encode())
+
     def build(self, pos, quat, stamp_ns):
-        s = self._slots
         if len(self.names):
             sec, nanosec = _split_stamp(stamp_ns)
-            s.i32[self._stamps] = sec
-            s.u32[self._stamps + 1] = nanosec
-            s.f64[self._rows] = _ros_pose_rows(pos, quat, self._scratch)
-        return s.bytes()
+            self._i32[self._stamps] = sec
+            self._u32[self._stamps + 1] = nanosec
+            self._f64[self._rows] = _ros_pose_rows(pos, quat, self._scratch)
+        return self._store[4 : self._end].tobytes()
+
+
+_PATHS = (("header", "stamp", "sec"), ("transform", "translation", "x"), ("transform", "rotation", "w"))

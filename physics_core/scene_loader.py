@@ -19,6 +19,7 @@ from .errors import SceneError
 from .model import (BuoyancyParams, DragParams, GravitationParams, Model, SpringSet,
                     frozen_array)
 from .planets import PLANETS, surface_gravity
+from .scene_yaml import load_yaml
 from .scene_limits import (MAX_BODIES, check_body_count, max_file_bytes, read_scene_text,
                            refuse_aliases)
 from .validate import NAME_RE, Reader
@@ -74,7 +75,7 @@ def read_scene_source(scene, max_bodies=MAX_BODIES):
     text = read_scene_text(path, max_file_bytes(max_bodies))
     refuse_aliases(text, path, SceneYamlLoader)
     try:
-        data = yaml.load(text, Loader=SceneYamlLoader)
+        data = load_yaml(text, SceneYamlLoader)
     except yaml.YAMLError as e:
         raise SceneError(path, "", "valid YAML", " ".join(str(e).split())[:300]) from None
     except RecursionError:

@@ -53,6 +53,7 @@ class DiagnosticsWindow:
         isolated=(),
         queued=0,
         unknown_topics=(0, 0),
+        body_topics=(0, 0),
     ):
         """DiagnosticArray for the window just ended; opens the next one."""
         now = time.monotonic()
@@ -80,6 +81,9 @@ class DiagnosticsWindow:
         values["queued_commands"] = int(queued)
         values["unknown_body_topics"] = int(unknown_topics[0])
         values["unknown_body_topics_ignored"] = int(unknown_topics[1])
+        # per-body endpoints made, and topics a large world makes when a peer uses them (body_topics.py)
+        values["body_topics"] = int(body_topics[0])
+        values["body_topics_on_demand"] = int(body_topics[1])
         values["isolated_bodies"] = ", ".join(isolated)
         values["paused"] = bool(paused)
         values["recording"] = recording

@@ -234,6 +234,7 @@ class OutputTap:
         self.bridge = bridge
         self.poses_topic = poses_topic
         self._ids = []  # tap channel id -> (recorder channel id, foxglove channel, is the poses topic)
+        self._specs = []  # tap channel id -> (topic, msg class, qos), to register with a later recorder
         self._index = {}
         self._latched = set()  # tap ids of transient-local topics (/clock, ~/bodies)
         self._last = {}  # tap id -> (data, time ns) of its latest message, for latched topics
@@ -242,15 +243,28 @@ class OutputTap:
     def path(self):
         return self.recorder.path if self.recorder is not None else ""
 
+    def set_recorder(self, recorder):
+        """Record into `recorder` from now on (None: stop); Foxglove keeps its channels."""
+        self.recorder = recorder
+        self._ids = [(None, ch, is_poses) for _, ch, is_poses in self._ids]
+
+    def _recorder_id(self, cid):
+        rid, ch, is_poses = self._ids[cid]
+        if rid is None:
+            topic, msg_class, qos = self._specs[cid]
+            rid = self.recorder.channel(topic, msg_class, STREAM if qos is None else qos)
+            self._ids[cid] = (rid, ch, is_poses)
+        return rid
+
     def channel(self, topic, msg_class, qos=None):
         key = (topic, msg_class)
         cid = self._index.get(key)
         if cid is None:
-            rid = None
-            if self.recorder is not None:
-                rid = self.recorder.channel(topic, msg_class, STREAM if qos is None else qos)
-            self._ids.append((rid, self.bridge.channel(topic, msg_class), topic == self.poses_topic))
+            self._ids.append((None, self.bridge.channel(topic, msg_class), topic == self.poses_topic))
+            self._specs.append((topic, msg_class, qos))
             cid = len(self._ids) - 1
+            if self.recorder is not None:
+                self._recorder_id(cid)
             self._index[key] = cid
             if qos is not None and qos.durability == DurabilityPolicy.TRANSIENT_LOCAL:
                 self._latched.add(cid)
@@ -260,9 +274,9 @@ class OutputTap:
         self.write_many((self.channel(topic, msg_class, qos),), (data,), time_ns, step)
 
     def write_many(self, channel_ids, datas, time_ns, step=0):
-        rows = [self._ids[c] for c in channel_ids]
         if self.recorder is not None:
-            self.recorder.write_many([r[0] for r in rows], datas, time_ns, step)
+            self.recorder.write_many([self._recorder_id(c) for c in channel_ids], datas, time_ns, step)
+        rows = [self._ids[c] for c in channel_ids]
         poses = False
         for cid, (_, ch, is_poses), data in zip(channel_ids, rows, datas):
             data = bytes(data)

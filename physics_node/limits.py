@@ -25,6 +25,16 @@ MAX_UNKNOWN_BODY_TOPICS = 64
 UNKNOWN_TOPIC_EXPIRY_S = 10.0
 UNKNOWN_TOPICS_PER_SCAN = 8
 
+# What the node keeps, recording or not, so that a recording started at run
+# time re-simulates (session_history.py): the commands, requests, events and
+# spawn files since the last full reset, each counted as its bytes plus
+# HISTORY_ITEM_BYTES for what holds it. Past MAX_HISTORY_BYTES the history is
+# dropped until the next reset; a recording started then plays back but
+# does not re-simulate. 64 MiB holds about 300,000 commands (100 per second
+# for 50 minutes).
+MAX_HISTORY_BYTES = 64 << 20
+HISTORY_ITEM_BYTES = 100
+
 # Requests a service holds before the middleware drops the oldest; a burst
 # of this many pause/unpause/reset calls is answered in order.
 SERVICE_QUEUE_DEPTH = 1_000

@@ -129,10 +129,13 @@ def how_to_push(node):
         f"p.publish(m); p.wait_for_all_acked(Duration(seconds=10))\""
     )
     lines = [
-        f"physics: {len(node.model.names)} bodies ({', '.join(node.model.names)}) from {node.scene_path}",
+        f"physics: {len(node.model.names)} bodies ({_first_names(node.model.names)}) from {node.scene_path}",
         f"physics: dt = {node.world.dt:.6g} s, real-time factor {node.settings.real_time_factor:g}"
         + (", paused" if node.paused else ""),
     ]
+    if node.on_demand:
+        lines.append(f"physics: each body's topics are made once a peer uses them (more than "
+                     f"topics_on_demand_above = {node.settings.topics_on_demand_above} bodies)")
     if node.recorder is not None:
         lines.append(f"physics: recording to {node.recorder.path} (closed cleanly on Ctrl-C)")
     lines += [
@@ -147,6 +150,11 @@ def how_to_push(node):
         "",
     ]
     return "\n".join(lines)
+
+
+def _first_names(names, shown=20):
+    more = f" and {len(names) - shown} more" if len(names) > shown else ""
+    return ", ".join(names[:shown]) + more
 
 
 class StopRequest:

@@ -5,7 +5,6 @@ The node only translates between ROS and the engine; the step boundary lives
 in `stepping.py`, message shapes in `msg_adapters`, the file in `recorder.py`.
 """
 
-import os
 import time
 import warnings
 
@@ -23,7 +22,6 @@ from physics_core import CommandError, default_scene_path, load_scene
 from .commands import (
     DISCARDED_ON_RESET,
     DROP_REASONS,
-    IMPULSE,
     MALFORMED,
     NON_FINITE,
     OUT_OF_RANGE,
@@ -31,19 +29,18 @@ from .commands import (
     REJECTED,
     STATIC_BODY,
     UNKNOWN_FRAME,
-    WRENCH,
     Command,
     check,
     out_of_range,
 )
+from .body_topics import ON_DEMAND_TICK_S, BodyTopics
 from .diagnostics import DiagnosticsWindow
 from .limits import MAX_QUEUED_PER_BODY, MAX_QUEUED_TOTAL, excerpt
 from .outputs import Outputs
 from .pacing import StepPacer
 from .parameters import ParameterValueError, coerce, declare
-from .qos import COMMANDS, SERVICES, per_body_events
-from .recorder import INTEGRATION_METADATA, SCENE_MEDIA_TYPE, SESSION_METADATA, Recorder, chunk_size_for
-from .session import engine_version, integration_metadata, session_metadata
+from .qos import SERVICES
+from .recording_control import RecordingControl
 from .sim_actions import SimulateStepsServer
 from .sim_services import SimServices
 from .stepping import Stepper
@@ -54,8 +51,10 @@ NODE_NAME = "physics"
 # executor deliver commands and service calls.
 TICK_BUDGET_S = 0.02
 DROP_WARNING_PERIOD_S = 2.0
-# How often the graph is searched for command topics of bodies the scene lacks.
-UNKNOWN_BODY_SCAN_S = 0.5
+# How often the graph is searched for command topics of bodies the scene
+# lacks (unknown_bodies.py) and, in a large world, for the bodies' own
+# topics peers use (body_topics.py).
+GRAPH_SCAN_S = 0.5
 # How often the node checks which odometry and marker topics have readers
 # (outputs.Outputs.refresh_subscribers): a new subscriber is served within this.
 SUBSCRIBER_SCAN_S = 0.2
@@ -77,6 +76,10 @@ class PhysicsNode(Node):
         for w in caught:
             self.get_logger().warning(str(w.message))
         self.model = self.world.model
+        # More bodies than this at start: their own topics are made when peers use them (body_topics.py).
+        self.on_demand = len(self.model.names) > self.settings.topics_on_demand_above
+        if self.on_demand and self.settings.odometry == "all":
+            raise ParameterValueError(_ALL_ODOMETRY_ON_DEMAND.format(n=len(self.model.names), s=self.settings))
         self.finished = False
         self.faulted = ""  # why the world cannot step, until reset
         self.paused = self.settings.paused
@@ -86,33 +89,33 @@ class PhysicsNode(Node):
         self._last_warning = {}
         self.unknown_bodies = UnknownBodyTopics(self, self.model.names, self._drop)
 
-        self.recorder = None
-        if self.settings.record:
-            try:
-                self.recorder = Recorder(
-                    self.settings.record,
-                    chunk_size=chunk_size_for(len(self.model.names)),
-                    library=f"physics_node {engine_version()}",
-                ).open()
-            except OSError as exc:
-                why = exc.strerror or exc
-                raise ParameterValueError(f"record: cannot write {self.settings.record!r}: {why}") from None
+        self.recording = RecordingControl(self)
+        self._pending_record = None  # a file opened by a `record` value being set
+        first = self.recording.open(self.settings.record) if self.settings.record else None
         try:
-            self._connect()
+            self._connect(first)
         except BaseException:
+            if first is not None and self.recording.recorder is None:
+                first.close()
             self.close()  # a half-built node still leaves a readable file
             raise
 
-    def _connect(self):
-        """Publishers, subscriptions, services and timers; first outputs."""
-        sink = self.recorder if self.foxglove is None else self.foxglove.attach(self, self.recorder)
-        self.outputs = Outputs(self, self.model, sink, odometry=self.settings.odometry)
-        if self.recorder is not None:
-            self._start_recording()
+    @property
+    def recorder(self):
+        """The Recorder in use, or None."""
+        return self.recording.recorder
 
-        self._command_topics = {}
-        self._command_subs = {}
-        self._subscribe_commands(self.model.names)
+    def _connect(self, recorder):
+        """Publishers, subscriptions, services and timers; first outputs."""
+        sink = None if self.foxglove is None else self.foxglove.attach(self, None)
+        self.outputs = Outputs(
+            self, self.model, sink, odometry=self.settings.odometry, on_demand=self.on_demand,
+            history=self.recording.history, on_record_error=self.recording.failed,
+        )
+        if recorder is not None:
+            self.recording.start(recorder, mid_session=False)
+        self.body_topics = BodyTopics(self, self.outputs, self._command_callback, on_demand=self.on_demand)
+        self.body_topics.add(self.model.names)
 
         self.create_service(Empty, "pause_physics", self._on_pause, qos_profile=SERVICES)
         self.create_service(Empty, "unpause_physics", self._on_unpause, qos_profile=SERVICES)
@@ -129,7 +132,9 @@ class PhysicsNode(Node):
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         self._tick = self.create_timer(self.pacer.tick_period(), self._on_tick, clock=steady)
         self.create_timer(1.0, self._on_diagnostics, clock=steady)
-        self.create_timer(UNKNOWN_BODY_SCAN_S, self.unknown_bodies.scan, clock=steady)
+        self.create_timer(GRAPH_SCAN_S, self._scan_graph, clock=steady)
+        if self.on_demand:
+            self.create_timer(ON_DEMAND_TICK_S, self.body_topics.make_queued, clock=steady)
         self.create_timer(
             SUBSCRIBER_SCAN_S / SUBSCRIBER_SCAN_PARTS,
             lambda: self.outputs.poll_subscribers(SUBSCRIBER_SCAN_PARTS),
@@ -142,28 +147,21 @@ class PhysicsNode(Node):
         self.outputs.send_state(self.world, t0, self.world.step_index)
 
     # -- recording ----------------------------------------------------------
-    def _start_recording(self):
-        name = os.path.basename(self.scene_path) or "scene.yaml"
-        text = self.model.source_text
-        self.recorder.add_attachment(name, text.encode(), SCENE_MEDIA_TYPE)
-        self.recorder.add_metadata(
-            SESSION_METADATA, session_metadata(self.settings, self.scene_path, self.world, self.get_fully_qualified_name())
-        )
-
     def close(self):
         """Finish the recording, if any, and stop serving Foxglove. Called on every exit path."""
         if getattr(self, "sim_actions", None) is not None:
             self.sim_actions.close()
             self.sim_actions = None
-        if self.recorder is not None:
-            try:
-                stats = integration_metadata(self.world)
-                if stats and self.recorder.is_open:
-                    self.recorder.add_metadata(INTEGRATION_METADATA, stats)
-            finally:
-                self.recorder.close()
+        self._discard_pending_record()
+        if getattr(self, "recording", None) is not None:
+            self.recording.stop()
         if self.foxglove is not None:
             self.foxglove.close()
+
+    def _discard_pending_record(self):
+        pending, self._pending_record = getattr(self, "_pending_record", None), None
+        if pending is not None:
+            pending.close()
 
     # -- stepping -----------------------------------------------------------
     def _on_tick(self):
@@ -223,7 +221,7 @@ class PhysicsNode(Node):
     # -- commands -------------------------------------------------------------
     def _command_callback(self, body, kind):
         def on_message(raw):
-            topic = self._command_topics[(body, kind)]
+            topic = self.body_topics.topics[(body, kind)]
             self.window.received_total += 1
             try:
                 frame, force, torque = wrench_arrays(deserialize_message(raw, WrenchStamped))
@@ -248,42 +246,26 @@ class PhysicsNode(Node):
         self.get_logger().warning(f"dropped a command on {excerpt(topic)}: {excerpt(detail)}{more}")
         self._last_warning[reason] = (now, 0)
 
-    def _subscribe_commands(self, names, paths=None):
-        _, command_events = per_body_events()
-        for name in names:
-            path = (paths or {}).get(name, name)
-            for kind in (WRENCH, IMPULSE):
-                sub = self.create_subscription(
-                    WrenchStamped,
-                    f"~/{path}/{kind}",
-                    self._command_callback(name, kind),
-                    COMMANDS,
-                    raw=True,
-                    event_callbacks=command_events,
-                )
-                self._command_topics[(name, kind)] = sub.topic_name
-                self._command_subs[(name, kind)] = sub
+    def _scan_graph(self):
+        """One look at the graph's topics serves both scans."""
+        topics = self.get_topic_names_and_types()
+        self.unknown_bodies.scan(topics=topics)
+        self.body_topics.found(topics)
 
     def bodies_changed(self, namespaces=None):
         """Bodies were spawned or deleted (entities.py): topics, outputs and
         the latched body list follow the world's new body list."""
         paths = {n: f"{ns}/{n}" for n, ns in (namespaces or {}).items() if ns}
-        old = set(name for name, _ in self._command_subs)
         self.model = self.world.model
-        self._drop_subscriptions(self._command_subs, lambda key: key[0] not in self.model.index)
+        self.body_topics.remove([n for n in self.outputs.model.names if n not in self.model.index])
         self.unknown_bodies.bodies_changed(self.model.names)  # a spawned body is no longer unknown
-        self._subscribe_commands([n for n in self.model.names if n not in old], paths)
         self.outputs.prefix = paths
         self.outputs.bodies_changed(self.model)
+        self.body_topics.add(self.model.names, paths)
         if self.foxglove is not None:
             self.foxglove.bodies_changed(self.model)
         t = sim_time_ns(self.world.time)
         self.outputs.send_bodies(self.world, t, self.world.step_index)
-
-    def _drop_subscriptions(self, subs, drop):
-        for key in [k for k in subs if drop(k)]:
-            self.destroy_subscription(subs.pop(key))
-            self._command_topics.pop(key, None)
 
     # -- services -------------------------------------------------------------
     def _on_pause(self, _request, response):
@@ -327,12 +309,32 @@ class PhysicsNode(Node):
     # -- parameters -------------------------------------------------------------
     def _check_parameters(self, params):
         for p in params:
+            reason = self._refusal(p)
+            if reason:
+                return SetParametersResult(successful=False, reason=reason)
+        return self._check_record([p.value for p in params if p.name == "record"])
+
+    def _refusal(self, p):
+        """Why the value of parameter `p` cannot be taken now, or None."""
+        try:
+            coerce(p.name, p.value)
+        except ParameterValueError as exc:
+            return str(exc)
+        if p.name == "paused" and p.value is False and self.faulted:
+            return f"{self.faulted}; call reset_simulation first"
+        if p.name == "odometry" and p.value == "all" and self.on_demand:
+            return _ALL_ODOMETRY_ON_DEMAND.format(n=len(self.model.names), s=self.settings)
+        return None
+
+    def _check_record(self, paths):
+        """A new `record` path is opened here, once every other value passed,
+        so that a path --record would refuse is refused the same way."""
+        self._discard_pending_record()
+        if paths and paths[-1]:
             try:
-                coerce(p.name, p.value)
+                self._pending_record = self.recording.open(paths[-1])
             except ParameterValueError as exc:
                 return SetParametersResult(successful=False, reason=str(exc))
-            if p.name == "paused" and p.value is False and self.faulted:
-                return SetParametersResult(successful=False, reason=f"{self.faulted}; call reset_simulation first")
         return SetParametersResult(successful=True)
 
     def _apply_parameters(self, params):
@@ -350,6 +352,12 @@ class PhysicsNode(Node):
                 self.stepper.command_timeout = value
             elif p.name == "odometry":
                 self.outputs.set_odometry(value)
+            elif p.name == "record":
+                pending, self._pending_record = self._pending_record, None
+                if pending is not None:
+                    self.recording.start(pending)
+                else:
+                    self.recording.stop()
 
     # -- diagnostics ------------------------------------------------------------
     def _on_diagnostics(self):
@@ -359,13 +367,21 @@ class PhysicsNode(Node):
             paused=self.paused,
             fault=self.faulted,
             target_rtf=self.settings.real_time_factor,
-            recording=self.recorder.path if self.recorder else "",
-            recording_error=self.outputs.recording_error,
+            recording=self.recording.path,
+            recording_error=self.recording.error,
             isolated=self.stepper.isolated,
             queued=self.stepper.pending,
             unknown_topics=(len(self.unknown_bodies.subscriptions), len(self.unknown_bodies.ignored)),
+            body_topics=(self.body_topics.made, self.body_topics.waiting),
         )
         self.outputs.send_diagnostics(msg, sim_time_ns(self.world.time), self.world.step_index)
+
+
+_ALL_ODOMETRY_ON_DEMAND = (
+    "parameter 'odometry' = 'all' needs an odometry publisher for every body, and this world of {n} bodies "
+    "makes its bodies' topics on demand (more than topics_on_demand_above = {s.topics_on_demand_above}); "
+    "raise topics_on_demand_above to make them all at start"
+)
 
 
 def _explain(reason, command, isolated=()):

@@ -15,29 +15,40 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
-from visualization_msgs.msg import Marker, MarkerArray
+from visualization_msgs.msg import MarkerArray
 
-from msg_adapters import BodyOdometry, SceneMarkers, body_markers, contact_cloud, pose_array, time_msg
+from msg_adapters import BodyOdometry, SceneMarkers, contact_cloud, pose_array, sim_time_ns, time_msg
 from msg_adapters.cdr import (
     CdrLayoutError,
     ContactCloudCdr,
     OdometryCdr,
     PoseArrayCdr,
     SceneMarkersCdr,
+    body_markers_cdr,
     clock_cdr,
 )
 
-from .limits import excerpt
 from .qos import COMMANDS, LATCHED, STREAM, TF, TF_STATIC, per_body_events
 from .recorder import EVENTS_SUFFIX, ISOLATE_EVENT, RESET_EVENT, RecorderError
 from .tf_output import TfOutput
 
 
 class Outputs:
-    def __init__(self, node, model, recorder=None, odometry="subscribed"):
+    def __init__(self, node, model, recorder=None, odometry="subscribed", on_demand=False, history=None,
+                 on_record_error=None):
+        """`recorder`: a Recorder, the Foxglove tap (which records into one
+        it is given), or None. `on_demand`: no odometry publisher is made
+        until `add_odometry` (body_topics.py makes them when a subscriber
+        appears). `history` (session_history.py) keeps every command, request
+        and event, recorded or not; `on_record_error(exc)` is told of a
+        write error (recording_control.py)."""
         self.model = model
+        self.on_demand = on_demand
         self.recorder = recorder
-        self.recording_error = ""  # why the recording stopped early, if it did
+        self._tap = recorder if hasattr(recorder, "set_recorder") else None
+        self.history = history
+        self._on_record_error = on_record_error
+        self._latched_sent = {}  # latched publisher -> (msg class, CDR) last sent, for a recording started later
         self._node = node
         pub = node.create_publisher
         self.clock = pub(Clock, "/clock", LATCHED)
@@ -48,7 +59,7 @@ class Outputs:
         self.diagnostics = pub(DiagnosticArray, "/diagnostics", STREAM)
         self.tf = TfOutput(pub(TFMessage, "/tf", TF), pub(TFMessage, "/tf_static", TF_STATIC), model)
         self.prefix = {}  # body -> its topics' path under the node when not its name (an entity namespace)
-        self.odom = [self._odom_publisher(name) for name in model.names]
+        self.odom = [None if on_demand else self._odom_publisher(name) for name in model.names]
         self._qos, self._topic = {}, {}
         self._index_publishers()
         self._channels = {}  # publisher -> recording channel id, made on its first message
@@ -73,6 +84,20 @@ class Outputs:
         self._qos.update({p.topic_name: q for p, q in self._all_publishers()})
         self._topic.update({p: p.topic_name for p, _ in self._all_publishers()})
 
+    def add_odometry(self, name):
+        """The odometry publisher of body `name`, made now if it has none
+        (on demand: someone subscribed); served once a poll sees the reader."""
+        i = self.model.index[name]
+        if self.odom[i] is None:
+            self.odom[i] = publisher = self._odom_publisher(name)
+            self._qos[publisher.topic_name] = STREAM
+            self._topic[publisher] = publisher.topic_name
+        return self.odom[i]
+
+    @property
+    def odometry_publishers(self):
+        return sum(1 for p in self.odom if p is not None)
+
     def bodies_changed(self, model):
         """Bodies were spawned or deleted: each body keeps its odometry
         publisher, a new one gets one, a deleted one's is destroyed; the
@@ -80,11 +105,14 @@ class Outputs:
         by_name = dict(zip(self.model.names, self.odom))
         for name in set(by_name) - set(model.names):
             publisher = by_name.pop(name)
+            if publisher is None:
+                continue
             self._topic.pop(publisher, None)
             self._channels.pop(publisher, None)
             self._node.destroy_publisher(publisher)
         self.model = model
-        self.odom = [by_name.get(name) or self._odom_publisher(name) for name in model.names]
+        keep = by_name.get if self.on_demand else lambda name: by_name.get(name) or self._odom_publisher(name)
+        self.odom = [keep(name) for name in model.names]
         self._index_publishers()
         self._build = _state_builder(model, self._node.get_logger())
         self.tf.bodies_changed(model)
@@ -108,15 +136,16 @@ class Outputs:
         size = -(-n // max(int(parts), 1))
         start = self._poll_at
         read = self._odom_read
+        odom = self.odom
         for i in range(start, min(start + size, n)):
-            read[i] = self.odom[i].get_subscription_count() > 0
+            read[i] = odom[i] is not None and odom[i].get_subscription_count() > 0
         self._poll_at = start + size if start + size < n else 0
         self._markers_on = self.markers.get_subscription_count() > 0
         self._update_rows()
 
     def _update_rows(self):
         if self.odometry == "all":
-            self._odom_rows = list(range(len(self.odom)))
+            self._odom_rows = [i for i, p in enumerate(self.odom) if p is not None]
         else:
             self._odom_rows = [i for i, r in enumerate(self._odom_read) if r]
 
@@ -135,7 +164,8 @@ class Outputs:
         yield self.tf.static, TF_STATIC
         yield self.tf.dynamic, TF
         for p in (self.poses, self.contacts, self.markers, self.diagnostics, *self.odom):
-            yield p, STREAM
+            if p is not None:
+                yield p, STREAM
 
     def _send(self, publisher, msg, time_ns, step):
         if self.recorder is None:
@@ -146,6 +176,8 @@ class Outputs:
     def _send_cdr(self, publisher, msg_class, data, time_ns, step):
         """Publish (and record) a message already serialized."""
         publisher.publish(data)
+        if publisher is self.clock or publisher is self.bodies or publisher is self.tf.static:
+            self._latched_sent[publisher] = (msg_class, data)
         if self.recorder is not None:
             topic = self._topic[publisher]
             self._record(self.recorder.write, topic, msg_class, data, time_ns, step, self._qos[topic])
@@ -156,22 +188,29 @@ class Outputs:
         try:
             write(*args)
         except (RecorderError, OSError) as exc:
-            self._recording_failed(exc)
+            if self._on_record_error is None:
+                raise
+            self._on_record_error(exc)
 
-    def _recording_failed(self, exc):
-        recorder, self.recorder = self.recorder, None
-        if recorder is None:
+    def set_recorder(self, recorder):
+        """Record into `recorder` from now on (None: stop recording); the
+        Foxglove tap, if any, keeps serving."""
+        if self._tap is not None:
+            self._tap.set_recorder(recorder)
+        else:
+            self.recorder = recorder
+        self._channels = {}  # channel ids are the old recorder's
+
+    def record_latched(self, time_s, step):
+        """The latched messages as last sent (/clock, ~/bodies, /tf_static)
+        into the recording, at sim time `time_s`: a recording started
+        mid-session has them from its start, as a late subscriber gets them."""
+        if self.recorder is None:
             return
-        cause = exc.__cause__ or exc
-        self.recording_error = f"recording {recorder.path} stopped: {excerpt(cause, 300)}"
-        try:
-            recorder.close()  # the file ends with the last chunk written
-        except (RecorderError, OSError):
-            pass
-        self._node.get_logger().error(
-            f"{self.recording_error}; the simulation goes on unrecorded "
-            f"(`physics-replay {recorder.path} --recover OUT.mcap` reads what was written)"
-        )
+        time_ns = sim_time_ns(time_s)
+        for publisher, (msg_class, data) in list(self._latched_sent.items()):
+            topic = self._topic[publisher]
+            self._record(self.recorder.write, topic, msg_class, data, time_ns, step, self._qos[topic])
 
     # -- per step ----------------------------------------------------------
     def send_clock(self, time_ns, step):
@@ -213,21 +252,24 @@ class Outputs:
         in ~/poses, ns and text = its name; after a delete, DELETE markers
         for the ids no longer used, so a viewer drops them) and the static
         bodies' /tf_static."""
-        msg = body_markers(self.model, world.state.pos, world.state.quat, time_ns)
         n = len(self.model.names)
-        for gone in range(n, self._bodies_sent):
-            marker = Marker(action=Marker.DELETE, id=gone, ns=self._body_ns.get(gone, ""))
-            marker.header.stamp = time_msg(time_ns)
-            msg.markers.append(marker)
+        gone = [(i, self._body_ns.get(i, "")) for i in range(n, self._bodies_sent)]
+        data = body_markers_cdr(self.model, world.state.pos, world.state.quat, time_ns, gone)
         self._bodies_sent = n
         self._body_ns = dict(enumerate(self.model.names))
-        self._send(self.bodies, msg, time_ns, step)
+        self._send_cdr(self.bodies, MarkerArray, data, time_ns, step)
         self._send_cdr(self.tf.static, TFMessage, self.tf.build_static(world.state, time_ns), time_ns, step)
 
     def record_request(self, topic, msg, time_ns, step):
         """A simulator-standard request as received, for --resimulate."""
+        self._keep(topic, type(msg), serialize_message(msg), time_ns, step, COMMANDS)
+
+    def _keep(self, topic, msg_class, data, time_ns, step, qos):
+        """A message --resimulate needs: into the history and the recording."""
+        if self.history is not None:
+            self.history.add(topic, msg_class, data, time_ns, step, qos)
         if self.recorder is not None:
-            self._record(self.recorder.write, topic, type(msg), serialize_message(msg), time_ns, step, COMMANDS)
+            self._record(self.recorder.write, topic, msg_class, data, time_ns, step, qos)
 
     def send_diagnostics(self, msg, time_ns, step):
         self._send(self.diagnostics, msg, time_ns, step)
@@ -237,7 +279,7 @@ class Outputs:
         """An applied command, at the sim time and index of the step that
         applied it. Commands the node made itself (a wrench timing out) are
         recorded as the zero WrenchStamped they amount to."""
-        if self.recorder is None:
+        if self.recorder is None and self.history is None:
             return
         data = command.raw
         if not data:
@@ -246,7 +288,7 @@ class Outputs:
             msg.header.frame_id = command.frame
             data = serialize_message(msg)
         topic = command.topic or f"{self._node.get_fully_qualified_name()}/{command.body}/wrench"
-        self._record(self.recorder.write, topic, WrenchStamped, data, time_ns, step, COMMANDS)
+        self._keep(topic, WrenchStamped, data, time_ns, step, COMMANDS)
 
     def record_reset(self, time_ns, step):
         self._record_event(RESET_EVENT, time_ns, step)
@@ -256,10 +298,9 @@ class Outputs:
         self._record_event(f"{ISOLATE_EVENT} {','.join(names)}", time_ns, step)
 
     def _record_event(self, text, time_ns, step):
-        if self.recorder is None:
+        if self.recorder is None and self.history is None:
             return
-        data = serialize_message(String(data=text))
-        self._record(self.recorder.write, self.events_topic, String, data, time_ns, step, STREAM)
+        self._keep(self.events_topic, String, serialize_message(String(data=text)), time_ns, step, STREAM)
 
 
 def _state_builder(model, logger):
@@ -273,18 +314,37 @@ def _state_builder(model, logger):
         poses = PoseArrayCdr(len(model.names))
         odometry = OdometryCdr(model.names)
         cloud = ContactCloudCdr()
-        scene_markers = SceneMarkersCdr(model, capacity=max(64, 4 * len(model.names)))
     except CdrLayoutError as exc:
         logger.warning(f"per-step messages go through rclpy's serializer: {exc}")
         return _serialized_state_builder(model)
+    markers_builder = _markers_builder(model, logger)
 
     def build(s, contacts, time_ns, odom_rows, markers):
         datas = [poses.build(s.pos, s.quat, time_ns), cloud.build(contacts, time_ns)]
         if odom_rows:
             datas += odometry.build(s.pos, s.quat, s.vel, s.omega, time_ns, odom_rows)
         if markers:
-            datas.append(scene_markers.build(s.pos, s.quat, contacts, time_ns))
+            datas.append(markers_builder(s.pos, s.quat, contacts, time_ns))
         return datas
+
+    return build
+
+
+def _markers_builder(model, logger):
+    """`build(pos, quat, contacts, time_ns)` -> the CDR of ~/markers, laid out
+    when first asked for (someone subscribed): 10,000 bodies' markers take
+    1.5 s to lay out, and most sessions never draw them."""
+    made = []
+
+    def build(pos, quat, contacts, time_ns):
+        if not made:
+            try:
+                made.append(SceneMarkersCdr(model, capacity=max(64, 4 * len(model.names))).build)
+            except CdrLayoutError as exc:
+                logger.warning(f"~/markers goes through rclpy's serializer: {exc}")
+                objects = SceneMarkers(model)
+                made.append(lambda *args: serialize_message(objects.build(*args)))
+        return made[0](pos, quat, contacts, time_ns)
 
     return build
 

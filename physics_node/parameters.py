@@ -12,11 +12,18 @@ from dataclasses import dataclass
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 
+from .body_topics import ON_DEMAND_ABOVE
+
 # name: (default, description, changeable while running)
 PARAMETERS = {
     "scene": ("", "scene YAML path; empty = the built-in default scene", False),
     "real_time_factor": (1.0, "sim seconds per wall second; 0 = as fast as possible", True),
-    "record": ("", "MCAP file to record the session to; empty = no recording", False),
+    "record": (
+        "",
+        "MCAP file to record the session to; empty = no recording. Set while running: the recording so far is "
+        "closed and this file started (empty: recording stops)",
+        True,
+    ),
     "duration": (0.0, "sim seconds to run, then exit; 0 = until stopped", False),
     "publish_every": (1, "publish poses, odometry, contacts and markers every N steps", True),
     "paused": (False, "start (or hold) the simulation paused", True),
@@ -27,6 +34,12 @@ PARAMETERS = {
         True,
     ),
     "max_bodies": (10_000, "most bodies a scene file may declare (physics_core/scene_limits.py)", False),
+    "topics_on_demand_above": (
+        ON_DEMAND_ABOVE,
+        "a world of more bodies at start makes each body's wrench, impulse and odom topics only once a peer "
+        "publishes or subscribes there (physics_node/body_topics.py); 0 = always on demand",
+        False,
+    ),
 }
 
 # Closed ranges of the numeric parameters. A real-time factor above 1,000 is
@@ -39,6 +52,7 @@ RANGES = {
     "command_timeout": (0.0, 1e6),
     "publish_every": (1, 1_000_000),
     "max_bodies": (1, 1_000_000),
+    "topics_on_demand_above": (0, 1_000_000),
 }
 
 # Each Publisher.publish costs 5-10 us in the middleware even with no reader
@@ -63,6 +77,7 @@ class Settings:
     command_timeout: float = 0.0
     odometry: str = "subscribed"
     max_bodies: int = 10_000
+    topics_on_demand_above: int = ON_DEMAND_ABOVE
 
 
 def _in_range(name, value, shown):
@@ -99,7 +114,7 @@ def coerce(name, value):
         return value
     if name in ("real_time_factor", "duration", "command_timeout"):
         return _as_float(name, value)
-    if name in ("publish_every", "max_bodies"):
+    if name in ("publish_every", "max_bodies", "topics_on_demand_above"):
         return _as_int(name, value)
     if name == "odometry":
         if value not in ODOMETRY_MODES:

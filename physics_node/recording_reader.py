@@ -6,6 +6,7 @@ the torn tail is ignored. `recover()` writes such a file out again complete,
 for tools that need the summary (rosbags, Foxglove, `ros2 bag`).
 """
 
+import io
 import struct
 from dataclasses import dataclass
 
@@ -28,11 +29,13 @@ class RecordedMessage:
 
 
 class Recording:
-    """A recording on disk. Construction reads its header, attachments and
-    metadata; `messages()` streams the messages in file order."""
+    """A recording on disk (a path), or in memory (bytes: an MCAP attached to
+    another, session_history.py). Construction reads its header, attachments
+    and metadata; `messages()` streams the messages in file order."""
 
     def __init__(self, path):
-        self.path = str(path)
+        self._data = bytes(path) if isinstance(path, (bytes, bytearray, memoryview)) else None
+        self.path = "<attached MCAP>" if self._data is not None else str(path)
         self.profile = None
         self.library = None
         self.attachments = []
@@ -44,7 +47,7 @@ class Recording:
         self._scan()
 
     def _records(self, emit_chunks):
-        with open(self.path, "rb") as f:
+        with io.BytesIO(self._data) if self._data is not None else open(self.path, "rb") as f:
             reader = StreamReader(f, emit_chunks=emit_chunks, validate_crcs=not emit_chunks)
             try:
                 for record in reader.records:

@@ -4,6 +4,11 @@ The world is loaded from the scene attached to the recording; each recorded
 command is submitted at the step index it was applied at (the message's
 `sequence`), through the same `Stepper` the node uses. Every recorded
 PoseArray is then compared with the recomputed state bit for bit.
+
+A recording started mid-session (`record` set while the node ran) carries
+the node's history since its last reset as an attached MCAP
+(session_history.py); that is re-applied first, so the world reaches the
+recording's first step exactly as the node had it.
 """
 
 import json
@@ -26,6 +31,7 @@ from .commands import Command
 from .recorder import EVENTS_SUFFIX, ISOLATE_EVENT, RESET_EVENT, SCENE_MEDIA_TYPE, SESSION_METADATA
 from .resimulate_requests import ReplayedRequests
 from .recording_reader import Recording
+from .session_history import HISTORY_MEDIA_TYPE, HISTORY_NAME, HISTORY_STATE, STARTED_AT_STEP
 from .stepping import Stepper
 
 MATCH, DIVERGE, ERROR = 0, 1, 2  # also the exit status of `physics-replay --resimulate`
@@ -116,7 +122,16 @@ def _resimulate(recording):
         raise ResimulationError(f"no {SESSION_METADATA!r} metadata: not a physics_node recording")
     # The body limit the node ran with (older recordings: the default).
     max_bodies = int(json.loads(session.get("param.max_bodies", str(MAX_BODIES))))
-    replay = _Replay(recording, session["node"], max_bodies)
+    history = _history(recording, session)
+    replay = _Replay(recording, session["node"], max_bodies, history)
+    if history is not None:
+        # the world up to the step the recording started at (no poses in it)
+        for m in history.messages():
+            replay.take(m)
+        replay.result.notes.append(
+            f"re-applied the node's history since its last reset up to step {session[STARTED_AT_STEP]}, "
+            "where the recording started"
+        )
     for m in recording.messages():
         if not replay.take(m):
             break
@@ -127,17 +142,35 @@ def _resimulate(recording):
     return result
 
 
+def _history(recording, session):
+    """The history attached to a recording started mid-session
+    (session_history.py), as a Recording; None for one started with the node."""
+    if STARTED_AT_STEP not in session:
+        return None
+    state = session.get(HISTORY_STATE, "")
+    attached = recording.attachment(media_type=HISTORY_MEDIA_TYPE, name=HISTORY_NAME)
+    if state != "complete" or attached is None:
+        raise ResimulationError(
+            f"the recording started at step {session[STARTED_AT_STEP]}, mid-session, without the history that "
+            f"rebuilds the world up to there ({state or 'none attached'}): physics-replay plays it back, "
+            "but it cannot be re-simulated"
+        )
+    return Recording(attached.data)
+
+
 class _Replay:
     """The recorded messages of one session, taken in file order."""
 
-    def __init__(self, recording, node, max_bodies=MAX_BODIES):
+    def __init__(self, recording, node, max_bodies=MAX_BODIES, history=None):
         self.world = _load_world(recording, max_bodies)
         self.stepper = Stepper(self.world, command_timeout=0.0, error_types=(CommandError, ValueError))
         self.poses_topic = f"{node}/poses"
         self.events_topic = node + EVENTS_SUFFIX
         # a spawned body's topics may sit under its entity namespace: ~/<ns>/<body>/wrench
         self.command_topic = re.compile(rf"^{re.escape(node)}/(?:.+/)?([^/]+)/(wrench|impulse)$")
-        self.requests = ReplayedRequests(self.stepper, node, recording.attachments, max_bodies)
+        # spawn files read before the recording started come first, in the order read
+        attachments = (history.attachments if history is not None else []) + recording.attachments
+        self.requests = ReplayedRequests(self.stepper, node, attachments, max_bodies)
         self.result = Result(MATCH)
 
     def take(self, m):

@@ -18,7 +18,6 @@ from simulation_interfaces.msg import EntityState, Result, SimulationState, Simu
 
 from msg_adapters import sim_time_ns
 
-from .recorder import RecorderError
 from .entities import SPAWN_FORMAT, Entities, EntityError, read_uri_file
 from .sim_requests import SPAWN_ATTACHMENT_PREFIX, SPAWN_MEDIA_TYPE
 from .entity_queries import bounds, info, matching
@@ -108,14 +107,8 @@ class SimServices:
         """A spawn file's text, kept in the recording (as an attachment named
         by the uri) so --resimulate spawns the same body without the file."""
         text = read_uri_file(uri)
-        # the file itself (outputs' sink may be the Foxglove tap); none once a write failed
-        recorder = self.node.recorder if self.node.outputs.recorder is not None else None
-        if recorder is not None:
-            t = sim_time_ns(self.node.world.time)
-            try:
-                recorder.add_attachment(SPAWN_ATTACHMENT_PREFIX + uri, text.encode(), SPAWN_MEDIA_TYPE, t)
-            except (RecorderError, OSError) as exc:
-                self.node.outputs._recording_failed(exc)
+        t = sim_time_ns(self.node.world.time)
+        self.node.recording.add_attachment(SPAWN_ATTACHMENT_PREFIX + uri, text.encode(), SPAWN_MEDIA_TYPE, t)
         return text
 
     def follow_bodies(self):

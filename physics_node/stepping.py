@@ -47,6 +47,7 @@ class Stepper:
         self._per_body = collections.Counter()
         self._errors = error_types
         self.isolated = []  # bodies frozen since the last reset, in order
+        self.resets = 0  # times the world went back to its scene (session_history.py follows them)
 
     def submit(self, command):
         """Queue `command` for the next boundary; None, or QUEUE_FULL if a
@@ -131,4 +132,5 @@ class Stepper:
         self.applier.forget()
         self.world.reset()
         self.isolated = []
+        self.resets += 1
         return dropped

@@ -24,7 +24,8 @@ from .qos import COMMANDS, per_body_events
 class UnknownBodyTopics:
     def __init__(self, node, names, on_drop):
         self._node = node
-        self._names = names
+        self._names = frozenset(names)
+        self._shown = _shown(names)
         self._on_drop = on_drop  # (topic, reason, detail) for each message received
         prefix = re.escape(node.get_fully_qualified_name())
         self._pattern = re.compile(rf"^{prefix}/([^/]+)/({WRENCH}|{IMPULSE})$")
@@ -34,17 +35,19 @@ class UnknownBodyTopics:
 
     def bodies_changed(self, names):
         """Bodies were spawned or deleted: a spawned body's topics are its own now."""
-        self._names = names
+        self._names = frozenset(names)
+        self._shown = _shown(names)
         for topic in [t for t in self.subscriptions if self._pattern.match(t).group(1) in names]:
             self._node.destroy_subscription(self.subscriptions.pop(topic))
             self._idle_since.pop(topic, None)
 
-    def scan(self, now=None):
-        """One graph scan: expire idle subscriptions, subscribe to new topics."""
+    def scan(self, now=None, topics=None):
+        """One graph scan: expire idle subscriptions, subscribe to new topics.
+        `topics`: the graph's (name, types) pairs, if already fetched."""
         now = time.monotonic() if now is None else now
         self._expire(now)
         made = 0
-        for topic, _types in self._node.get_topic_names_and_types():
+        for topic, _types in self._node.get_topic_names_and_types() if topics is None else topics:
             match = self._pattern.match(topic)
             if not match or match.group(1) in self._names or topic in self.subscriptions:
                 continue
@@ -58,8 +61,7 @@ class UnknownBodyTopics:
         return made
 
     def _subscribe(self, topic, body):
-        shown = ", ".join(self._names[:20]) + (f" and {len(self._names) - 20} more" if len(self._names) > 20 else "")
-        detail = f"no body named {excerpt(body, 60)!r}; bodies are {shown}"
+        detail = f"no body named {excerpt(body, 60)!r}; bodies are {self._shown}"
 
         def on_unknown(_raw, topic=topic, detail=detail):
             self._on_drop(topic, UNKNOWN_BODY, detail)
@@ -81,3 +83,9 @@ class UnknownBodyTopics:
                 del self._idle_since[topic]
         if len(self.subscriptions) < MAX_UNKNOWN_BODY_TOPICS:
             self.ignored.clear()  # re-examined at this scan
+
+
+def _shown(names):
+    """The first bodies' names, for a log line."""
+    names = list(names)
+    return ", ".join(names[:20]) + (f" and {len(names) - 20} more" if len(names) > 20 else "")

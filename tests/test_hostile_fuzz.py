@@ -295,6 +295,7 @@ def test_unknown_body_subscriptions_are_capped_spread_and_expire():
 def test_a_recording_error_stops_the_recording_and_reports_error_level(world, tmp_path):
     from physics_node.outputs import Outputs
     from physics_node.recorder import RecorderError
+    from physics_node.recording_control import RecordingControl
 
     errors = []
 
@@ -310,14 +311,20 @@ def test_a_recording_error_stops_the_recording_and_reports_error_level(world, tm
 
     outputs = Outputs.__new__(Outputs)
     outputs.recorder = recorder = Failing()
-    outputs.recording_error = ""
-    outputs._node = types.SimpleNamespace(get_logger=lambda: types.SimpleNamespace(error=errors.append))
+    outputs._tap, outputs._channels = None, {}
+    node = types.SimpleNamespace(
+        get_logger=lambda: types.SimpleNamespace(error=errors.append), stepper=types.SimpleNamespace(resets=0),
+        outputs=outputs,
+    )
+    control = RecordingControl(node)
+    control.recorder = recorder
+    outputs._on_record_error = control.failed
     outputs._record(recorder.write, "/topic", None, b"", 0, 0)
-    outputs._record(recorder.write, "/topic", None, b"", 0, 0)  # no recorder any more: nothing happens
-    assert outputs.recorder is None and recorder.closed
-    assert "No space left on device" in outputs.recording_error and len(errors) == 1
+    outputs._record(recorder.write, "/topic", None, b"", 0, 0)  # no recording any more: nothing more happens
+    assert outputs.recorder is None and control.recorder is None and recorder.closed
+    assert "No space left on device" in control.error and len(errors) == 1
     window = DiagnosticsWindow(world, ("queue_full",))
-    msg = window.report(0, "physics", False, 1.0, recorder.path, recording_error=outputs.recording_error)
+    msg = window.report(0, "physics", False, 1.0, recorder.path, recording_error=control.error)
     assert msg.status[0].level == DiagnosticStatus.ERROR
 
 

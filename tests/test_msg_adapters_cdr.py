@@ -9,10 +9,12 @@ from rclpy.serialization import deserialize_message, serialize_message
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import String
-from visualization_msgs.msg import MarkerArray
+from tf2_msgs.msg import TFMessage
+from visualization_msgs.msg import Marker, MarkerArray
 
 from msg_adapters import (
     BodyOdometry,
+    body_markers,
     ContactArrays,
     SceneMarkers,
     contact_cloud,
@@ -21,14 +23,17 @@ from msg_adapters import (
     scene_markers,
     time_msg,
 )
+from msg_adapters import cdr
 from msg_adapters.cdr import (
     ContactCloudCdr,
     OdometryCdr,
     PoseArrayCdr,
     SceneMarkersCdr,
+    body_markers_cdr,
     clock_cdr,
     layout,
 )
+from msg_adapters.tf import TransformsCdr, transforms_message
 from physics_core import load_scene
 
 # Names of different lengths (so messages and markers start at every
@@ -166,3 +171,76 @@ def test_the_nodes_fallback_without_cdr_layouts_sends_the_same_messages(model):
         assert len(fast) == len(slow) == len(types)
         for a, b, cls in zip(fast, slow, types):
             assert deserialize_message(a, cls) == deserialize_message(b, cls)
+
+
+@pytest.mark.parametrize("n", [0, 1, 2, 3, 50])
+def test_pose_arrays_of_any_length_are_rclpys_bytes(n):
+    rng = np.random.default_rng(n)
+    pos, quat, _, _ = _state(rng, n)
+    built = PoseArrayCdr(n).build(pos, quat, 3 * 10**9 + 11)
+    expected = pose_array(pos, quat, 3 * 10**9 + 11)
+    assert deserialize_message(built, PoseArray) == expected
+    assert len(built) == len(serialize_message(expected))
+
+
+# Names whose byte lengths give every alignment of what follows them (é is two bytes).
+NAMES = ["a", "bb", "ccc", "dddd", "eeeee", "é", "s9999", "", "long_name_of_a_body_17"]
+
+
+@pytest.mark.parametrize("names", [[], NAMES[:1], NAMES, NAMES[::-1] * 3])
+def test_transforms_match_the_object_builder(names):
+    rng = np.random.default_rng(len(names))
+    pos, quat, _, _ = _state(rng, len(names))
+    built = TransformsCdr(names)
+    for stamp in (0, 2_000_000_003):
+        data = built.build(pos, quat, stamp)
+        expected = transforms_message(names, pos, quat, stamp)
+        assert deserialize_message(data, TFMessage) == expected
+        assert len(data) == len(serialize_message(expected))
+
+
+def _many_bodies():
+    """30 bodies whose names are 1-12 characters long, so markers of each
+    name length start at both alignments, and a static one."""
+    rng = np.random.default_rng(11)
+    bodies = [{"name": "ground", "shape": {"type": "plane"}}]
+    for i in range(30):
+        shape = {"type": "sphere", "radius": 0.1} if i % 2 else {"type": "box", "half_extents": [0.1, 0.2, 0.3]}
+        name = "b" + "x" * int(rng.integers(0, 12)) + str(i)
+        bodies.append({"name": name, "shape": shape, "mass": 1.0, "static": i == 7})
+    return load_scene({"dt": 0.01, "bodies": bodies}).model
+
+
+@pytest.mark.parametrize("which", ["five", "thirty"])
+def test_body_markers_with_deletes_match_the_object_builder(model, which):
+    model = model if which == "five" else _many_bodies()
+    rng = np.random.default_rng(3)
+    pos, quat, _, _ = _state(rng, len(model.names))
+    deleted = [(5, "gone"), (6, ""), (7, "é_long_name")]
+    expected = body_markers(model, pos, quat, 77)
+    for marker_id, ns in deleted:
+        marker = Marker(action=Marker.DELETE, id=marker_id, ns=ns)
+        marker.header.stamp = time_msg(77)
+        expected.markers.append(marker)
+    for gone in ((), deleted):
+        data = body_markers_cdr(model, pos, quat, 77, gone)
+        want = MarkerArray(markers=expected.markers[: len(model.names) + len(gone)])
+        assert deserialize_message(data, MarkerArray) == _on_the_wire(want)
+        assert len(data) == len(serialize_message(want))
+
+
+def test_layouts_reused_for_fixed_size_types_equal_a_field_by_field_walk(model, monkeypatch):
+    """The cached layouts of Pose, Time, Vector3, ... (cdr._fixed_layout) give
+    the offsets a walk of every field gives, whatever offset they start at."""
+    rng = np.random.default_rng(5)
+    pos, quat, vel, omega = _state(rng, len(model.names))
+    msgs = [
+        pose_array(pos, quat, 5),
+        transforms_message(NAMES, *_state(rng, len(NAMES))[:2], 6),
+        scene_markers(model, pos, quat, _contacts(rng, 3, len(model.names)), 7),
+        BodyOdometry(model.names).build(pos, quat, vel, omega, 8)[2],
+    ]
+    cached = [layout(m) for m in msgs]
+    monkeypatch.setattr(cdr, "_fixed_layout", lambda msg, start: None)
+    monkeypatch.setattr(cdr, "_FIXED_LAYOUTS", {})
+    assert [layout(m) for m in msgs] == cached
