@@ -137,7 +137,7 @@ MUTATIONS = (
              (T + "test_collisions_restitution.py",)),
     Mutation("bounce friction pushes along the slip", "restitution", C + "bounce.py",
              "s1, s2 = -u1 * scale, -u2 * scale", "s1, s2 = u1 * scale, u2 * scale",
-             (T + "test_collisions_friction.py", T + "test_collisions_restitution.py")),
+             (T + "test_contact_energy_audit.py", T + "test_collisions_friction.py")),
     Mutation("impact speed without the integrator's velocity stagger", "restitution", C + "bounce.py",
              "shift = (w - 0.5) * (u0 - u_s)", "shift = 0.0 * (u0 - u_s)",
              (T + "test_elastic_impacts.py", T + "test_collisions_restitution.py")),

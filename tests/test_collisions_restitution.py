@@ -142,3 +142,30 @@ def test_newtons_cradle_passes_the_speed_down_the_row():
     np.testing.assert_allclose(vx, [0, 0, 0, 0, v], atol=1e-12)
     np.testing.assert_allclose(w.momentum(), p0, atol=1e-14)
     assert w.kinetic_energy() == pytest.approx(k0, rel=1e-12)
+
+
+@pytest.mark.parametrize("drop", [0.0123, 0.1, 0.3, 0.5])
+def test_speculative_contact_closes_its_gap_an_inelastic_ball_lands_on_the_floor(drop):
+    """Regression (speculative contacts could not close their gap): a contact
+    found within the margin at the end of a substep started it s0 apart, and
+    the normal row lets the pair close those s0 in the substep (u_n ≥ −s0/h,
+    COURSE.md 5); a row asking u_n ≥ 0 stops a falling ball s0 above the
+    floor, more than the 1 mm margin, and it hovers there. A C_R = 0 ball
+    dropped from `drop` touches the floor within one step of the fall time
+    √(2 drop / g) and then rests on it: gap at most rounding (1e-12 m),
+    overlap at most one step's gravity sag g h² (measured: exactly 0)."""
+    g, h, r = 9.81, 1.0 / 240.0, 0.1
+    w = load_scene({"dt": h, "gravity": [0, 0, -g], "effects": {"contacts": {"sleep": False}},
+                    "bodies": [{"name": "floor", "shape": {"type": "plane"}, "material": "steel"},
+                               {"name": "ball", "shape": {"type": "sphere", "radius": r}, "mass": 1.0,
+                                "material": "steel", "restitution": 0.0, "position": [0, 0, r + drop]}]})
+    fall = np.sqrt(2.0 * drop / g)
+    landed = None
+    for _ in range(int(fall / h) + 48):          # 0.2 s past the landing
+        w.step()
+        if landed is None and w.body("ball").position[2] - r <= 1e-12:
+            landed = w.time
+    assert landed == pytest.approx(fall, abs=h)
+    overlap = r - w.body("ball").position[2]
+    assert -1e-12 <= overlap <= g * h * h
+    assert abs(w.body("ball").velocity[2]) <= 1e-12

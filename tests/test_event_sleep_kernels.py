@@ -526,3 +526,39 @@ def test_arrays_of_another_world_are_refused():
     with pytest.raises(ValueError):
         log.add(np.array([1, 2]), np.zeros(2, np.int64), np.ones(1, np.int64), p, p,
                 np.zeros(2), np.ones(2), p, np.zeros(2))
+
+
+def test_a_body_deeper_than_the_slop_does_not_fall_asleep():
+    """Regression (a body deeper than the slop fell asleep): position correction
+    still pushes apart a contact deeper than twice the slop, so its bodies are
+    not at rest whatever their velocity reads, and neither is their island.
+    A floor (0), box 1 sunk 3 cm into it, box 2 resting on box 1 at the slop,
+    box 3 alone on the floor 6 mm deep (under twice the slop of 5 mm); all
+    with zero velocity. Box 3 sleeps after sleep_time; boxes 1 and 2 sleep
+    only sleep_time after box 1 has been pushed out to under twice the slop."""
+    from physics_core.collision.contact_layout import BODY_A, BODY_B, DEPTH, ICOL, NCOL
+    from physics_core.collision.contact_stages import touching_edges, unsettled_bodies
+    from physics_core.collision.sleep_islands import _update
+    n, slop, dt, sleep_time = 4, 0.005, 0.1, 0.5
+    R, I = np.zeros((3, NCOL)), np.zeros((3, ICOL), np.int64)
+    I[:, BODY_A], I[:, BODY_B] = [0, 1, 0], [1, 2, 3]
+    R[:, DEPTH] = [0.03, slop, 0.006]
+    is_static = np.array([True, False, False, False])
+    awake, vel, omega = np.ones(n, bool), np.zeros((n, 3)), np.zeros((n, 3))
+    timers = SleepTimers(n)
+
+    def step():
+        ea, eb = touching_edges(R, I)
+        return _update(awake, is_static, vel, omega, unsettled_bodies(R, I, n, slop), ea, eb, dt,
+                       0.05, 0.1, sleep_time, timers.timer, timers.island, timers.prev_awake,
+                       timers.next_island)
+
+    np.testing.assert_array_equal(unsettled_bodies(R, I, n, slop), [True, True, False, False])
+    for _ in range(10):                       # twice sleep_time, box 1 still 3 cm deep
+        step()
+    np.testing.assert_array_equal(awake, [True, True, True, False])
+    assert timers.timer[1] == 0.0
+    R[0, DEPTH] = 0.009                       # pushed out to under twice the slop
+    slept = [step() for _ in range(5)]        # 5 dt = sleep_time
+    assert slept == [False] * 4 + [True]
+    np.testing.assert_array_equal(awake, [True, False, False, False])

@@ -353,3 +353,36 @@ def test_unreadable_scene_exits_with_a_message(tmp_path):
     with NodeProcess(["--scene", missing], tmp_path, isolated=True) as node:
         assert node.wait() == 2
         assert "nope.yaml" in node.log()
+
+
+def test_two_runs_at_once_never_share_a_ros_domain(tmp_path):
+    """Regression (two test runs shared a ROS domain): the domain came from the
+    pid modulo 100, and a run once read another run's 10,000-body
+    `/physics/bodies` as its own node's. A domain is now held by a lock that
+    a second reservation cannot take, until every process holding it is gone
+    (a node started by NodeProcess holds it too)."""
+    import subprocess
+    import sys
+
+    from test_node_support import DOMAINS, reserve_domain
+
+    first, lock = reserve_domain(str(tmp_path))
+    taken = [reserve_domain(str(tmp_path)) for _ in range(DOMAINS - 1)]
+    assert len({first, *(d for d, _ in taken)}) == DOMAINS
+    with pytest.raises(RuntimeError, match="held by other test runs"):
+        reserve_domain(str(tmp_path))
+    for _, other in taken:
+        other.close()
+    # a child holding the lock keeps the domain after this process lets go
+    child = subprocess.Popen([sys.executable, "-c", "import sys; sys.stdin.read()"],
+                             stdin=subprocess.PIPE, pass_fds=(lock.fileno(),))
+    try:
+        lock.close()
+        again, held = reserve_domain(str(tmp_path))
+        assert again != first
+        held.close()
+    finally:
+        child.communicate(b"")
+    again, held = reserve_domain(str(tmp_path))      # free once the child has exited
+    held.close()
+    assert again == first

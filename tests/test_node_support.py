@@ -1,11 +1,16 @@
 """Shared helpers for the node tests: start `physics-node` as a separate
 process and drive it from this one. Holds no tests itself.
 
-Every test run uses its own ROS domain (from the pid) and localhost-only
-discovery, so parallel runs and other ROS traffic do not mix.
+Every test run uses its own ROS domain and localhost-only discovery, so
+parallel runs and other ROS traffic do not mix: the domain is one no other
+test process on this machine holds (a lock file per domain), not one taken
+from the pid, which two runs at once shared one time in a hundred (a node
+test then read another run's 10,000-body `/physics/bodies`).
 """
 
+import fcntl
 import os
+import tempfile
 import signal
 import subprocess
 import sys
@@ -21,7 +26,36 @@ REPO = Path(__file__).resolve().parents[1]
 # replay's re-simulation took over 60 s beside a CPU hog and six other jobs),
 # so each deadline a test states is stretched by this factor.
 DEADLINE_SCALE = float(os.environ.get("PHYSICS_TEST_DEADLINE_SCALE", "5"))
-DOMAIN_ID = os.environ.get("PHYSICS_TEST_DOMAIN_ID") or str(1 + os.getpid() % 100)
+DOMAINS = 100          # test domains 1-100; each one's isolated twin is 101-200
+
+
+def reserve_domain(folder=None):
+    """(domain id, the open lock file) of the first test domain from a
+    pid-dependent start whose lock no other process holds. The lock (flock)
+    lasts while the file stays open, and the kernel drops it when the
+    process ends however it ends, so a killed run never leaves one behind."""
+    folder = folder or os.path.join(tempfile.gettempdir(), "physics-test-domains")
+    os.makedirs(folder, exist_ok=True)
+    start = os.getpid() % DOMAINS
+    for k in range(DOMAINS):
+        domain = 1 + (start + k) % DOMAINS
+        try:
+            lock = open(os.path.join(folder, f"{domain}.lock"), "a")
+        except OSError:            # another user's lock file
+            continue
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            lock.close()
+            continue
+        return str(domain), lock
+    raise RuntimeError(f"all {DOMAINS} test ROS domains are held by other test runs ({folder})")
+
+
+if os.environ.get("PHYSICS_TEST_DOMAIN_ID"):
+    DOMAIN_ID, DOMAIN_LOCK = os.environ["PHYSICS_TEST_DOMAIN_ID"], None
+else:
+    DOMAIN_ID, DOMAIN_LOCK = reserve_domain()   # held for this process's life
 os.environ["ROS_DOMAIN_ID"] = DOMAIN_ID
 ISOLATED_DOMAIN_ID = str(int(DOMAIN_ID) + 100)
 os.environ.setdefault("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
@@ -77,6 +111,9 @@ class NodeProcess:
             stdout=self._log,
             stderr=subprocess.STDOUT,
             start_new_session=True,
+            # the node holds the domain's lock too: a node that outlives this
+            # run (it is in a session of its own) keeps its domain from the next
+            pass_fds=() if DOMAIN_LOCK is None else (DOMAIN_LOCK.fileno(),),
         )
 
     def alive(self):

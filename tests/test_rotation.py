@@ -41,6 +41,23 @@ def test_constant_torque_spins_up_at_tau_over_I():
     assert world.body("box").angular_velocity == pytest.approx([0.0, 0.0, expected], abs=1e-12)
 
 
+@pytest.mark.parametrize("integrator", INTEGRATORS)
+def test_torque_about_an_oblique_axis_changes_L_by_tau_t_in_every_component(integrator):
+    """Regression (the torque kick of L had the wrong sign about x; every
+    torque the tests applied lay along y or z): dL/dt = τ in the world frame
+    (COURSE.md 3), so a held torque along an oblique axis, on an asymmetric
+    box turned off its principal axes and starting at rest, gives L = τ t in
+    each component, whatever the box's tumbling. Each integrator adds a
+    constant τ to L exactly, so to round-off (1e-12 relative)."""
+    q = axis_angle([1.0, -2.0, 0.5], 0.9)
+    world = load_scene(scene(box(half_extents=HALF, mass=2.0, orientation=q), integrator=integrator))
+    tau = np.array([0.3, -0.2, 0.5])
+    world.apply_torque("box", tau)
+    world.step(120)
+    assert np.linalg.norm(world.body("box").angular_velocity) > 1.0     # it does turn
+    assert world.angular_momentum() == pytest.approx(tau * world.time, rel=1e-12, abs=1e-12)
+
+
 def test_off_centre_impulse_gives_omega_from_r_cross_J():
     """ω = I_w⁻¹ (r × J), v = J/m (COURSE.md 3, angular impulse), on a box turned
     away from its principal axes. With no torque afterwards L stays r × J exactly

@@ -62,3 +62,36 @@ def test_box_on_an_incline_1_degree_below_the_friction_angle_holds(block, mu_s):
     x0 = w.state.pos[1].copy()
     w.step(720)
     assert np.abs(w.state.pos[1] - x0).max() < 1e-4
+
+
+@pytest.mark.parametrize("spin", [10.0, -10.0])
+def test_a_box_spinning_flat_on_the_floor_is_stopped_by_the_twist_friction(spin):
+    """Regression (the manifold's twist friction dropped): a box spinning
+    about the floor's normal has no slip at the anchor, so only the twist
+    row stops it. Its four corners carry m g and slide at distance
+    r̄ = √(a² + b²) from the centre, so the friction torque is μ_k m g r̄
+    (COURSE.md 2) and, with I_z = m (a² + b²)/3, the spin falls at
+    α = 3 μ_k g / √(a² + b²) (52.6 rad/s² here; measured to 1e-9 once the
+    contact has settled, 1e-6 allowed) until it stops at t = |ω0|/α, within
+    a step; then it stays stopped and the box never moves sideways."""
+    a, b, c, mu_k = 0.2, 0.1, 0.05, 0.4        # steel on steel
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        w = load_scene({"dt": DT, "gravity": [0.0, 0.0, -G], "effects": {"contacts": {"sleep": False}},
+                        "bodies": [{"name": "floor", "shape": {"type": "plane"}, "material": "steel"},
+                                   {"name": "box", "mass": 1.0, "material": "steel", "restitution": 0.0,
+                                    "position": [0, 0, c], "angular_velocity": [0, 0, spin],
+                                    "shape": {"type": "box", "half_extents": [a, b, c]}}]})
+    alpha = 3.0 * mu_k * G / math.hypot(a, b)
+    spins, stopped = [], None
+    for _ in range(120):
+        w.step()
+        spins.append(w.body("box").angular_velocity[2])
+        if stopped is None and abs(spins[-1]) < 1e-12:
+            stopped = w.time
+    rates = -np.sign(spin) * np.diff(spins[12:36]) / DT
+    np.testing.assert_allclose(rates, alpha, rtol=1e-6)
+    assert stopped == pytest.approx(abs(spin) / alpha, abs=DT)
+    assert np.abs(spins[-60:]).max() < 1e-12
+    assert np.linalg.norm(w.body("box").velocity[:2]) < 1e-12
+    assert np.linalg.norm(w.body("box").position[:2]) < 1e-9
