@@ -125,3 +125,29 @@ def test_ball_with_few_ccd_halvings_is_not_frozen_short_of_a_wall(halvings):
     b = world.body("ball")
     assert b.velocity[0] == pytest.approx(-50.0, rel=1e-9)
     assert b.position[0] < -0.07
+
+
+@pytest.mark.parametrize("speed, gap", [(5.0, 0.0), (20.0, 0.0005), (100.0, 0.0)])
+def test_a_ball_touching_a_thin_wall_is_stopped_at_the_ccd_depth_instead_of_crossing_it(speed, gap):
+    """Regression (ccd let a touching pair go eight times deeper before a hit):
+    a 5 mm ball touching a 1 cm static wall (a gap within the 1 mm contact
+    margin) and driven into it at `speed` crosses the whole wall within one
+    substep, and in between it is never deeper than r + the wall's half
+    thickness, 10 mm. The ccd stage lets a touching pair go ccd_threshold ×
+    the thinner body's smallest half size (0.5 × 5 mm = 2.5 mm) deeper than
+    it started before it counts as crossing, and stops it there: the C_R = 0
+    ball ends at rest that deep in, short of it by at most the bisection's
+    bracket (ccd_tolerance of the step's travel, v h 1e-4)."""
+    r = half = 0.005
+    wall = {"name": "wall", "shape": {"type": "box", "half_extents": [half, 0.5, 0.5]},
+            "static": True, "material": "steel"}
+    ball = {"name": "ball", "shape": {"type": "sphere", "radius": r}, "mass": 0.01, "material": "steel",
+            "restitution": 0.0, "position": [-(half + r + gap), 0.0, 0.0], "velocity": [speed, 0.0, 0.0]}
+    world = load_scene(scene(wall, ball, dt=DT, gravity=[0, 0, 0], effects={"contacts": {"sleep": False}}))
+    deepest = 0.0
+    for _ in range(20):
+        world.step()
+        deepest = max(deepest, world.body("ball").position[0] + half + r)
+    allowed = max(-gap, 0.0) + 0.5 * min(r, half)
+    assert allowed - speed * DT * 1e-4 <= deepest <= allowed
+    assert np.linalg.norm(world.body("ball").velocity) <= 1e-12
