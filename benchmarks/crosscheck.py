@@ -30,13 +30,17 @@ from .results_io import machine, write_json, write_text
 # (not of this run's numbers); quoted under the table.
 MODEL_NOTES = {
     "slide": "PyBullet and MuJoCo are given μ = μ_k, so only their sliding friction is tested. "
-             "A semi-implicit step with a = μ_k g from the first step stops v0 dt / 2 − a dt² f (1 − f) / 2 "
-             "= 6.24 mm short of the continuous distance (f = 0.49, the fraction of a step left when it "
-             "stops); this engine's distance is that one to 3e-11 m: every step, the first included, "
-             "takes μ_k g dt off the speed. The peers' distances are longer by what their contacts lose "
-             "while they form (measured): PyBullet's first steps take 0.15, 0.41, 0.68 μ_k g dt as its "
-             "box sinks into the floor (5.7 mm after 100 steps); MuJoCo's soft contact throws the box "
-             "up at 0.42 m/s in its second step and it slides 20 steps in the air, without friction.",
+             "A semi-implicit step that moves a body by its whole velocity change stops "
+             "v0 dt / 2 − a dt² f (1 − f) / 2 = 6.24 mm short of the continuous distance (f = 0.49, "
+             "the fraction of a step left when it stops); the peers are near that. This engine "
+             "moves a body by half of what friction at its kinetic bound changed, the exact motion "
+             "under that constant force (½ a h², COURSE.md 4; physics_core/collision/kinetic_drift.py), "
+             "so it is on x = v0 t − ½ a t² after every whole step and stops short only by the last, "
+             "partial one, f² a dt² / 2 = 8 µm. The peers' own distances are longer than the "
+             "semi-implicit one by what their contacts lose while they form (measured): PyBullet's "
+             "first steps take 0.15, 0.41, 0.68 μ_k g dt as its box sinks into the floor (5.7 mm "
+             "after 100 steps); MuJoCo's soft contact throws the box up at 0.42 m/s in its second "
+             "step and it slides 20 steps in the air, without friction.",
     "bounce": "MuJoCo has no coefficient of restitution: C_R is mapped to the damping ratio of its "
               f"contact spring, ζ = {ce.mujoco_dampratio(cs.C_R):.4f} (a linear spring–damper's e = "
               "exp(−ζπ/√(1−ζ²))), with solref timeconst "

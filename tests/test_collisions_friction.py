@@ -145,18 +145,35 @@ def test_box_launched_sliding_takes_mu_k_from_the_step_that_makes_its_contact():
     step that made the floor contact of a box launched at 3 m/s took
     μ_s g dt = 1.5 μ_k g dt off its speed and it stopped 1.1 % short of
     v0² / (2 μ_k g) (COURSE.md 2: a sliding contact has kinetic friction).
-    Semi-implicit Euler with a = μ_k g from the first step slides
-    dt Σ_{k=1..N} (v0 − k a dt), N = ⌊v0 / (a dt)⌋, which is
-    v0² / (2a) − v0 dt / 2 + a dt² f (1 − f) / 2 (f the fraction of a step
-    past N): short of the closed form by v0 dt / 2 less at most a dt² / 8.
-    The bug was short by v0 dt."""
+    The bug was short by v0 dt (12 mm); see the next test for the rest.
+    The first step takes μ_k g dt off the speed (the bug: 1.5 times that,
+    8 mm/s more), to 1e-6 m/s: the normal impulse is m g dt to the solver's
+    early-stop tolerance."""
+    v0, mu_k, dt = 3.0, 0.4, 1.0 / 240.0
+    w = load_scene(slider_scene(v0, mu_k=mu_k))
+    w.step(1)
+    assert w.body("box").velocity[0] == pytest.approx(v0 - mu_k * G * dt, abs=1e-6)
+
+
+def test_box_sliding_to_a_stop_covers_v0_squared_over_2_mu_k_g_not_v0_dt_over_2_less():
+    """Regression: every substep moved the box by its whole velocity change,
+    friction's included, so a box launched at 3 m/s stopped v0 dt / 2 = 6.2 mm
+    short of v0² / (2 μ_k g), the error of a velocity-then-position step
+    under a constant force. Friction at its kinetic bound is that constant
+    force, μ_k m g (COURSE.md 2), and moves the box by ½ a h² (COURSE.md 4):
+    the box is then where the closed form puts it after every whole step,
+    x = v0 t − ½ a t², and the last step (with v_N = f a dt left, f the
+    fraction of a step the slide has left) stops it without moving on,
+    f² a dt² / 2 short (8 µm here). Bound: that, to 1e-9 m."""
     v0, mu_k, dt = 3.0, 0.4, 1.0 / 240.0
     w = load_scene(slider_scene(v0, mu_k=mu_k))
     w.step(round(1.5 / dt))                     # it stops after v0 / (μ_k g) = 0.76 s
     a = mu_k * G
+    f = v0 / (a * dt) % 1.0
     short = v0 ** 2 / (2 * a) - w.body("box").position[0]
-    assert v0 * dt / 2 - a * dt ** 2 / 8 <= short <= v0 * dt / 2
+    assert short == pytest.approx(f * f * a * dt * dt / 2, abs=1e-9)
     assert np.linalg.norm(w.body("box").velocity) < 1e-12
+    assert w.body("box").position[2] == pytest.approx(HALF[2], abs=1e-6)   # no sinking, no hop
 
 
 def test_box_set_down_at_rest_on_an_incline_still_holds_with_mu_s():

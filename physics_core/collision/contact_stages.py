@@ -20,6 +20,7 @@ from .contact_data import (CCD_ITERATIONS, CCD_THRESHOLD, CCD_TOLERANCE, CORRECT
                            SLEEP_TIME, SLOP, STATIC_SPEED, VELOCITY_TOLERANCE, WARM_FRACTION)
 from .contact_layout import BODY_A, BODY_B, DEPTH, ICOL, LAM, NCOL
 from .detection import detect_arrays
+from .kinetic_drift import kinetic_velocity_change
 from .manifold_friction import anchor_friction_out, anchor_rows, anchor_warm_start
 from .push_out import correct
 from .sequential_impulses import friction_and_slip, least_mass, solve_velocities, warm_start
@@ -126,11 +127,11 @@ def solve_stage(fp, ip, R, I, M, MI, key, vel, omega, warm, J):
     """Sequential-impulse sweeps (the rows come warm-started), the solve's
     impulses kept in the warm cache, then the shock-propagation sweep
     (shock_propagation.py) and the collision pass's J added to λ. Returns
-    the friction impulses (world vectors, for the events) and the sweeps
-    done."""
+    the friction impulses (world vectors, for the events), the sweeps done
+    and the velocity change of friction at its kinetic bound (kinetic_drift.py)."""
     if len(R) == 0:
         warm_clear(warm[0], warm[1])
-        return np.zeros((0, 3)), 0
+        return np.zeros((0, 3)), 0, np.zeros((0, 3))
     # an impulse change dλ moves a row's relative velocity by about dλ / m_eff
     limit = fp[VELOCITY_TOLERANCE] * least_mass(R) if fp[VELOCITY_TOLERANCE] > 0.0 else -1.0
     sweeps = solve_velocities(R, I, M, MI, vel, omega, ip[ITERATIONS], limit)
@@ -145,13 +146,14 @@ def solve_stage(fp, ip, R, I, M, MI, key, vel, omega, warm, J):
     if ip[SHOCK_ON] and shock_sweep(R, I, M, MI, vel, omega, len(vel), ip[SHOCK_ON], settle):
         friction_and_slip(R, I, vel, omega, friction, slip)
         anchor_friction_out(R, M, MI, friction)
+    slide = kinetic_velocity_change(R, I, M, MI, len(vel))
     add_bounces(R, J, friction)
-    return friction, sweeps
+    return friction, sweeps, slide
 
 
 @njit(cache=True)
-def correct_stage(fp, ip, R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, h):
-    correct(R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, h, fp[SLOP],
+def correct_stage(fp, ip, R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, slide, h):
+    correct(R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, slide, h, fp[SLOP],
             fp[CORRECTION_RATE], fp[MAX_CORRECTION_SPEED], ip[POSITION_ITERATIONS])
 
 

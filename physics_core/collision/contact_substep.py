@@ -45,7 +45,7 @@ def _collide(cm, fp, ip, s, masses, start, sleep, warm, toi, h, cap):
 
 
 @njit(cache=True)
-def _correct(cm, fp, ip, R, I, s, vel0, omega0, target, tau, toi, h):
+def _correct(cm, fp, ip, R, I, s, vel0, omega0, target, tau, toi, slide, h):
     """correct, then the rest of the substep of the bodies ccd moved back,
     searched like a whole substep (time_of_impact.py)."""
     pos, quat, vel, omega, awake = s
@@ -53,7 +53,7 @@ def _correct(cm, fp, ip, R, I, s, vel0, omega0, target, tau, toi, h):
     again = rewound.any()
     p_impact = pos.copy() if again else pos[:0]
     q_impact = quat.copy() if again else quat[:0]
-    correct_stage(fp, ip, R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, h)
+    correct_stage(fp, ip, R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, slide, h)
     if again:
         rewind_bodies(cm.kind, cm.dims, cm.reach, cm.is_static, rewound, p_impact, q_impact,
                       pos, quat, omega, fp[CCD_THRESHOLD], fp[MARGIN], ip[CCD_ITERATIONS],
@@ -126,7 +126,7 @@ def _respond(cm, fp, ip, s, masses, start, sleep, warm, events, h, dt, last, pro
         return SOLVE
     t = cycles()
     if moves:
-        _correct(cm, fp, ip, R, I, s, before[0], before[1], target, tau, toi, h)
+        _correct(cm, fp, ip, R, I, s, before[0], before[1], target, tau, toi, solved[2], h)
     prof[CORRECT] += cycles() - t
     if not _finite(pos, quat, vel, omega):
         return CORRECT

@@ -7,6 +7,8 @@ integrator would have given with v (COURSE.md 4). A bounce acts from its
 time of impact τ h on (bounce.py): the change then counts for the rest of
 the substep only, (1 − τ) h. A body the ccd stage moved back to its time of
 impact t moves from there with its solved velocity for the rest, (1 − t) h.
+Friction at its kinetic bound is a constant force over the substep: the part
+of the change it made moves the body by half as much (kinetic_drift.py).
 
 What overlap is left beyond `slop` is removed at `correction_rate` per
 substep, at most `max_correction_speed`, by pseudo-velocities that move
@@ -33,22 +35,27 @@ def bounce_remainders(n, I, target, tau):
 
 
 @njit(cache=True)
-def velocity_changes(vel, omega, vel0, omega0, I, target, tau, toi):
+def velocity_changes(vel, omega, vel0, omega0, I, target, tau, toi, slide):
     """(n, 6) the rate each body still moves at over h beyond the integrator's
     motion: what the solve changed, over the part of the substep it acts on;
     a body moved back to its time of impact toi (≥ 0) moves with its solved
-    velocity over the rest of the substep, (1 − toi) h."""
+    velocity over the rest of the substep, (1 − toi) h. slide (n, 3) or
+    (0, 3): the part of the change made by friction at its kinetic bound, a
+    constant force over the substep, which moves the body by half of it
+    (kinetic_drift.py)."""
     n = len(vel)
     after = bounce_remainders(n, I, target, tau)
+    half = len(slide) == n
     dV = np.empty((n, 6))
     for i in range(n):
         rest = 1.0 - toi[i]
         scale = after[i] if after[i] >= 0.0 else 1.0
+        drift = half and toi[i] < 0.0 and after[i] < 0.0
         for j in range(3):
             if toi[i] >= 0.0:
                 dV[i, j], dV[i, 3 + j] = vel[i, j] * rest, omega[i, j] * rest
             else:
-                dV[i, j] = (vel[i, j] - vel0[i, j]) * scale
+                dV[i, j] = (vel[i, j] - vel0[i, j]) * scale - (0.5 * slide[i, j] if drift else 0.0)
                 dV[i, 3 + j] = (omega[i, j] - omega0[i, j]) * scale
     return dV
 
@@ -121,10 +128,10 @@ def move_bodies(pos, quat, dV, X, h):
 
 
 @njit(cache=True)
-def correct(R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, h, slop, rate,
+def correct(R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, slide, h, slop, rate,
             max_speed, iterations):
     """The whole correct stage (see the module docstring)."""
-    dV = velocity_changes(vel, omega, vel0, omega0, I, target, tau, toi)
+    dV = velocity_changes(vel, omega, vel0, omega0, I, target, tau, toi, slide)
     k = len(R)
     sep = np.empty(k)
     separations(R, I, dV, h, sep)
