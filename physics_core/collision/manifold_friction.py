@@ -30,6 +30,7 @@ import numpy as np
 from numba import njit
 
 from .contact_build import start_separation, touch_shift, world_inverse_inertia
+from .kinetic_bound import kinetic_bound
 from .contact_layout import (BODY_A, BODY_B, DEPTH, DIR, INV_MASS_A, INV_MASS_B, LAM, MU_K, MU_S,
                              SLIDING, U0)
 
@@ -235,9 +236,9 @@ def update_anchor(R, I, M, MI, k, vel, omega):
     lim = mu * ln
     mag2 = n0 * n0 + n1 * n1
     if mag2 > lim * lim:
-        if sliding:              # μ_k λ_n against the slip (COURSE.md 2)
-            s = lim / math.sqrt(u0 * u0 + u1 * u1 + _TINY)
-            n0, n1 = -u0 * s, -u1 * s
+        if sliding:              # μ_k Σλ_n against the slip it is left with (kinetic_bound.py)
+            n0, n1 = kinetic_bound(M[k, o], 0.5 * (M[k, o + 1] + M[k, o + 3]), M[k, o + 4], n0, n1,
+                                   lim)
         else:                    # the static bound, in the direction that would hold
             s = lim / math.sqrt(mag2 + _TINY)
             n0, n1 = n0 * s, n1 * s

@@ -15,17 +15,19 @@ point's friction is one 2-D impulse in the tangent plane, solved with the tangen
 block W_tt (friction.py): the impulse that stops the slip, corrected for the
 velocity the normal change of the same update gives (W_tn), capped at
 μ λ_n. Over the cap, a sliding contact (kinetic, μ_k) takes μ_k λ_n against
-its slip velocity (the course's μ_k j along −t); a sticking one keeps the
-direction of the impulse that would stop it (the static bound μ_s λ_n).
+the slip it ends the update with (the course's μ_k j along −t;
+kinetic_bound); a sticking one keeps the direction of the impulse that
+would stop it (the static bound μ_s λ_n).
 """
 import math
 
 from numba import njit
 
 from .contact_build import row_velocity
+from .kinetic_bound import kinetic_bound
 from .manifold_friction import COUNT, FIRST, update_anchor
 from .contact_layout import (BIAS, BODY_A, BODY_B, DIR, G_TN, INV_MASS_A, INV_MASS_B, LAM, MASS_N,
-                             MU, SLIDING, TURN_A, TURN_B, W_TN, W_TT_INV)
+                             MU, SLIDING, TURN_A, TURN_B, W_TT_INV)
 
 _TINY = 1e-300
 
@@ -53,15 +55,17 @@ def warm_start(R, I, vel, omega):
 
 
 @njit(cache=True)
-def friction_cap(R, c, lt1, lt2, ln, v1, v2, sliding):
-    """Coulomb's bound |λ_t| ≤ μ λ_n (friction.cap), for one contact."""
+def friction_cap(R, c, lt1, lt2, ln, sliding):
+    """Coulomb's bound |λ_t| ≤ μ λ_n, for one contact: a sliding contact
+    takes μ_k λ_n against its slip (kinetic_bound); a sticking one keeps the
+    direction of the impulse that would stop it (the static bound μ_s λ_n)."""
     lim = R[c, MU] * ln
     mag2 = lt1 * lt1 + lt2 * lt2
     if not mag2 > lim * lim:
         return lt1, lt2
     if sliding:
-        scale = lim / math.sqrt(v1 * v1 + v2 * v2 + _TINY)
-        return -v1 * scale, -v2 * scale
+        return kinetic_bound(R[c, W_TT_INV], 0.5 * (R[c, W_TT_INV + 1] + R[c, W_TT_INV + 2]),
+                             R[c, W_TT_INV + 3], lt1, lt2, lim)
     scale = lim / math.sqrt(mag2 + _TINY)
     return lt1 * scale, lt2 * scale
 
@@ -82,9 +86,7 @@ def update_contact(R, I, c, vel, omega):
     s2 = R[c, W_TT_INV + 2] * u1 + R[c, W_TT_INV + 3] * u2
     lt1 = old_1 - s1 - R[c, G_TN] * dn
     lt2 = old_2 - s2 - R[c, G_TN + 1] * dn
-    v1 = u1 + R[c, W_TN] * dn
-    v2 = u2 + R[c, W_TN + 1] * dn
-    lt1, lt2 = friction_cap(R, c, lt1, lt2, ln, v1, v2, I[c, SLIDING] != 0)
+    lt1, lt2 = friction_cap(R, c, lt1, lt2, ln, I[c, SLIDING] != 0)
     R[c, LAM], R[c, LAM + 1], R[c, LAM + 2] = ln, lt1, lt2
     apply_impulse(R, c, 0, dn, a, b, vel, omega)
     apply_impulse(R, c, 1, lt1 - old_1, a, b, vel, omega)

@@ -1,0 +1,56 @@
+"""The kinetic friction impulse of one solver update (COURSE.md 2 and 5).
+
+A sliding contact takes μ_k F_N against its sliding. The solver updates a
+contact's friction impulse λ (2 tangents) many times a substep, and "its
+sliding" must be the slip it is left with, or the update does not settle:
+taken along the slip before the update (which already carries the old
+impulse), the direction flips every update whenever the free slip is
+between one and two times what μ_k λ_n can take off (a sphere's friction
+traded between two directions 100° apart, its spin between −1.5 and
+3.5 rad/s, sweep after sweep, in a forming pile).
+
+`kinetic_bound` returns the impulse on |λ| = lim whose slip after the
+update is against it. With A = W_tt⁻¹ (the tangent block's inverse) and λ*
+the impulse that would stop the slip, the slip left is W (λ − λ*); for
+λ = (I + σ A)⁻¹ λ* that is −σ λ, against λ for every σ ≥ 0, and σ is the
+one with |λ| = lim: the point of the friction disk that dissipates most.
+It is found by Newton's method on 1/|λ(σ)| − 1/lim, which is nearly linear
+in σ (Moré and Sorensen's trust-region step); for an isotropic A it is
+exact in one iteration, λ* scaled to lim.
+"""
+import math
+
+from numba import njit
+
+_TINY = 1e-300
+NEWTON_STEPS = 30          # a few suffice; the cap keeps a bad case finite
+
+
+@njit(cache=True)
+def _shrunk(a11, a12, a22, lt1, lt2, sigma):
+    """(I + σ A)⁻¹ λ* and its derivative in σ, −(I + σ A)⁻¹ A λ (A symmetric 2×2)."""
+    m11, m12, m22 = 1.0 + sigma * a11, sigma * a12, 1.0 + sigma * a22
+    det = m11 * m22 - m12 * m12
+    x1, x2 = (m22 * lt1 - m12 * lt2) / det, (m11 * lt2 - m12 * lt1) / det
+    y1, y2 = a11 * x1 + a12 * x2, a12 * x1 + a22 * x2
+    return x1, x2, -(m22 * y1 - m12 * y2) / det, -(m11 * y2 - m12 * y1) / det
+
+
+@njit(cache=True)
+def kinetic_bound(a11, a12, a22, lt1, lt2, lim):
+    """λ on |λ| = lim with the slip after the update against it (module
+    docstring); A = [[a11, a12], [a12, a22]] = W_tt⁻¹, λ* = (lt1, lt2) the
+    impulse that would stop the slip."""
+    if not lim > 0.0:
+        return 0.0, 0.0
+    sigma = 0.0
+    x1, x2 = lt1, lt2
+    for _ in range(NEWTON_STEPS):
+        x1, x2, d1, d2 = _shrunk(a11, a12, a22, lt1, lt2, sigma)
+        norm = math.sqrt(x1 * x1 + x2 * x2)
+        slope = -(x1 * d1 + x2 * d2) / (norm * norm * norm)     # d(1/|λ|)/dσ ≥ 0
+        if abs(norm - lim) <= 1e-14 * lim or not slope > 0.0:
+            break
+        sigma = max(sigma - (1.0 / norm - 1.0 / lim) / slope, 0.0)
+    scale = lim / math.sqrt(x1 * x1 + x2 * x2 + _TINY)
+    return x1 * scale, x2 * scale
