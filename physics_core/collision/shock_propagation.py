@@ -47,6 +47,13 @@ from .manifold_friction import COUNT, FIRST, IMA, IMB, M_LAM, TA, TB, _invert
 from .sequential_impulses import update_manifold
 
 UNREACHED = np.int64(1) << 40
+# A layer's sweeps have stalled when a sweep's change is above this fraction
+# of the change two sweeps before: a body on several supports can trade
+# impulses between them in a cycle that more sweeps do not end (a pyramid's
+# box on two boxes kept changing by 7.35e-4 m/s a sweep from its third sweep
+# to its sixteenth; a pile's second layer by 6.9e-3 m/s). A single support,
+# as in a stack or the 1000:1 pair, converges well inside the factor.
+STALL = 0.9
 
 
 @njit(cache=True)
@@ -204,6 +211,21 @@ def _update(R1, I1, M1, MI1, m, vel, omega, lever, tolerance, moved, clock, befo
 
 
 @njit(cache=True)
+def _sweep(one_sided, start, stop, vel, omega, levers, tolerance, moved, clock, every, before):
+    """One sweep (number `clock`) over manifolds start..stop: all of them if
+    `every`, else those with a body that moved in the sweep before or this
+    one. Returns the largest contact-point velocity change (m/s)."""
+    R1, I1, M1, MI1 = one_sided
+    change = 0.0
+    for m in range(start, stop):
+        a, b = I1[MI1[m, FIRST], BODY_A], I1[MI1[m, FIRST], BODY_B]
+        if every or moved[a] >= clock - 1 or moved[b] >= clock - 1:
+            change = max(change, _update(R1, I1, M1, MI1, m, vel, omega, levers[m - start],
+                                         tolerance, moved, clock, before))
+    return change
+
+
+@njit(cache=True)
 def _settle(one_sided, start, stop, vel, omega, passes, tolerance, moved, clock):
     """Sweeps over one layer's manifolds start..stop (the lower layer
     immovable), up to `passes`, until a sweep changes no contact-point
@@ -214,22 +236,23 @@ def _settle(one_sided, start, stop, vel, omega, passes, tolerance, moved, clock)
     sweep before or this one is settled and skipped. The test is on
     velocities, not impulses: four coplanar corners share a load in many
     ways, so their impulses can keep trading while the body's velocity has
-    long settled. Returns the sweep count after these sweeps."""
+    long settled. A layer also stops when its change has stalled (STALL).
+    Returns the sweep count after these sweeps."""
     R1, I1, M1, MI1 = one_sided
     levers = np.empty(stop - start)
     for m in range(start, stop):
         levers[m - start] = _lever(R1, MI1[m, FIRST], MI1[m, COUNT])
     before = np.empty(12)
+    last = earlier = math.inf
     for p in range(passes):
         clock += 1
-        change = 0.0
-        for m in range(start, stop):
-            a, b = I1[MI1[m, FIRST], BODY_A], I1[MI1[m, FIRST], BODY_B]
-            if p == 0 or moved[a] >= clock - 1 or moved[b] >= clock - 1:
-                change = max(change, _update(R1, I1, M1, MI1, m, vel, omega, levers[m - start],
-                                             tolerance, moved, clock, before))
+        change = _sweep(one_sided, start, stop, vel, omega, levers, tolerance, moved, clock,
+                        p == 0, before)
         if tolerance > 0.0 and change < tolerance:
             break
+        if change > STALL * earlier:
+            break
+        earlier, last = last, change
     return clock
 
 
