@@ -123,7 +123,7 @@ def restitution_stage(fp, ip, R, I, M, MI, vel, omega, v0, w0, h):
 
 
 @njit(cache=True)
-def solve_stage(fp, ip, R, I, M, MI, key, vel, omega, warm, J):
+def solve_stage(fp, ip, R, I, M, MI, key, vel, omega, warm, J, masses):
     """Sequential-impulse sweeps (the rows come warm-started), the solve's
     impulses kept in the warm cache, then the shock-propagation sweep
     (shock_propagation.py) and the collision pass's J added to λ. Returns
@@ -143,7 +143,8 @@ def solve_stage(fp, ip, R, I, M, MI, key, vel, omega, warm, J):
     # each manifold settled to a hundredth of the sweeps' velocity tolerance:
     # a looser stop let the 20-stack's top creep 1.4 mm a second
     settle = 0.01 * fp[VELOCITY_TOLERANCE]
-    if ip[SHOCK_ON] and shock_sweep(R, I, M, MI, vel, omega, len(vel), ip[SHOCK_ON], settle):
+    if ip[SHOCK_ON] and shock_sweep(R, I, M, MI, vel, omega, len(vel), ip[SHOCK_ON], settle,
+                                    masses):
         friction_and_slip(R, I, vel, omega, friction, slip)
         anchor_friction_out(R, M, MI, friction)
     slide = kinetic_velocity_change(R, I, M, MI, len(vel))

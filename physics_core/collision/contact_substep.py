@@ -120,7 +120,8 @@ def _respond(cm, fp, ip, s, masses, start, sleep, warm, events, h, dt, last, pro
     if not _finite(pos, quat, vel, omega):
         return RESTITUTION
     t = cycles()
-    solved = solve_stage(fp, ip, R, I, M, MI, contacts[5], vel, omega, warm, J)
+    solved = solve_stage(fp, ip, R, I, M, MI, contacts[5], vel, omega, warm, J,
+                         (masses[0], masses[1], quat))
     prof[SOLVE] += cycles() - t
     if not _finite(pos, quat, vel, omega):
         return SOLVE
