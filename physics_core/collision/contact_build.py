@@ -13,13 +13,13 @@ overlap is removed by the position pass, never by adding velocity. A body
 the ccd stage moved back to its time of impact already sits at the start
 of its remaining motion, so there s0 = s_end.
 """
-import numpy as np
 from numba import njit
 
 from ..quaternion import row4, to_matrix_one
 from .contact_layout import (ARM_A, ARM_B, BIAS, BODY_A, BODY_B, DEPTH, DIR, E, G_TN, INV_MASS_A,
                              INV_MASS_B, K_A, K_B, LAM, MASS_N, MU, MU_K, MU_S, SLIDING, TURN_A,
                              TURN_B, U0, W_TN, W_TT, W_TT_INV)
+from .scratch import take_rows
 
 RESTITUTION_RULES = {"effective_mass": 0, "mean": 1, "min": 2, "max": 3}
 _TINY = 1e-30
@@ -171,9 +171,10 @@ def contact_arms(R, c, i, j, point, depth, pos, vel, omega, iw_a, iw_b, h, rewou
 
 @njit(cache=True)
 def build_rows(R, I, a, b, point, normal, depth, pos, quat, vel, omega, inv_mass, inv_inertia,
-               material, mu_static, mu_kinetic, restitution, rule, h, toi):
-    """Fill R, I for the k contacts (a, b, point, normal, depth)."""
-    iw_a, iw_b = np.empty((3, 3)), np.empty((3, 3))
+               material, mu_static, mu_kinetic, restitution, rule, h, toi, store):
+    """Fill R, I for the k contacts (a, b, point, normal, depth); store: the
+    substep's scratch (scratch.py)."""
+    iw_a, iw_b = take_rows(store, 3, 3), take_rows(store, 3, 3)
     for c in range(len(a)):
         i, j = a[c], b[c]
         I[c, BODY_A], I[c, BODY_B], I[c, SLIDING] = i, j, 0
