@@ -76,7 +76,7 @@ def solid_table(kind, dims, reach, pos, quat, margin, solid, cols):
     return cols
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def overlaps(cols, p, q):
     """Rows p, q pass broadphase._filter: bounding spheres, then boxes (touching counts)."""
     d = cols[p, CEN] - cols[q, CEN]
@@ -279,7 +279,7 @@ def _sparse_index(keys, store):
     return order, first[:u + 1], cells[:u]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _sparse_span(first, cells, key):
     """[start, end) of cell `key` among the occupied `cells` (sorted keys)."""
     u = np.searchsorted(cells, key)

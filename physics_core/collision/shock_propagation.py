@@ -215,7 +215,7 @@ def _point_change(vel, omega, i, before, o, lever):
     return dv + dw * lever
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _update(R1, I1, M1, MI1, m, vel, omega, lever, tolerance, moved, clock, before):
     """One update of manifold m; returns the largest change of a contact-point
     velocity of its bodies it made (m/s). A body whose change reaches

@@ -61,7 +61,7 @@ def turn_angle(q0, q1):
     return 2.0 * math.acos(min(c, 1.0))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def sweep(kind, reach, i, p0, q0, pos, quat):
     """Bound on how far any point of body i moves over the substep."""
     d = math.sqrt((pos[i, 0] - p0[i, 0]) ** 2 + (pos[i, 1] - p0[i, 1]) ** 2
