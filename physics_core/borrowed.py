@@ -14,7 +14,8 @@ borrowed array is stored anywhere that outlives the call: run_steps borrows
 what World.step hands it for the length of the call, and nothing in a step
 keeps an input array (the warm cache and the event log store arrays they
 allocate themselves). Tuples (and named tuples) are borrowed member by
-member; anything that is not an array is passed through unchanged.
+member, typed lists as the list (its items are counted as before: a
+borrowed list keeps them); anything else is passed through unchanged.
 """
 from numba import types
 from numba.core import cgutils
@@ -27,6 +28,12 @@ def _borrowed(context, builder, typ, value):
         ary.meminfo = cgutils.get_null_value(ary.meminfo.type)
         ary.parent = cgutils.get_null_value(ary.parent.type)
         return ary._getvalue()
+    if isinstance(typ, types.ListType):
+        # a typed list is (meminfo, data): the data pointer is all its
+        # methods use, and the items keep their own counts
+        lst = cgutils.create_struct_proxy(typ)(context, builder, value=value)
+        lst.meminfo = cgutils.get_null_value(lst.meminfo.type)
+        return lst._getvalue()
     if isinstance(typ, types.BaseTuple):
         out = value
         for i, member in enumerate(typ):

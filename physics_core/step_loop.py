@@ -14,9 +14,10 @@ bodies; the state is left as that stage made it).
 import numpy as np
 from numba import njit
 
-from .borrowed import borrow, keep_alive
+from .borrowed import borrow
 from .collision.contact_substep import N_STAGES
 from .collision.contact_substep import run as contact_substep
+from .collision.scratch import new_counts, new_scratch, open_arena, take_rows
 from .cycle_clock import cycles
 from .finite import all_finite
 from .adaptive import ADAPTIVE, advance
@@ -29,7 +30,7 @@ FORCES = N_STAGES + 2          # one per force effect, integration.py's order
 FAILED_INTEGRATE = 100
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _integrate(code, h, idata, body, loads, masses, work, adaptive, prof):
     pos, quat, vel, omega, awake = body
     user_force, user_force_offset, user_torque, flags = loads
@@ -46,7 +47,7 @@ def _integrate(code, h, idata, body, loads, masses, work, adaptive, prof):
     prof[INTEGRATE] += cycles() - t
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _finite(body, prof):
     t = cycles()
     ok = all_finite(body[0], body[1], body[2], body[3])
@@ -54,40 +55,54 @@ def _finite(body, prof):
     return ok
 
 
+@njit(cache=True, inline="always")
+def _copy(store, a):
+    """A copy of `a` in the substep's scratch (collision/scratch.py)."""
+    out = take_rows(store, a.shape[0], a.shape[1])
+    out[:] = a
+    return out
+
+
+@njit(cache=True, inline="always")
+def _start(body, store):
+    """(pos, quat, vel, omega) at the start of a substep, in kept scratch."""
+    return _copy(store, body[0]), _copy(store, body[1]), _copy(store, body[2]), _copy(store, body[3])
+
+
 @njit(cache=True)
 def _one_step(substeps, dt, code, idata, body, loads, masses, work, contacts, adaptive, prof):
     """One step; -1 or the failed stage."""
-    pos, quat = body[0], body[1]
-    cm, fp, ip, sleep, warm, events, cap = contacts
+    cm, fp, ip, sleep, warm, events, cap, scratch = contacts
     h = dt / substeps
     for sub in range(substeps):
-        start = (pos.copy(), quat.copy(), body[2].copy(), body[3].copy())
-        borrowed_start = borrow(start)
+        store = open_arena(scratch, cap)
+        start = _start(body, store)
         _integrate(code, h, idata, body, loads, masses, work, adaptive, prof)
         if not _finite(body, prof):
             return FAILED_INTEGRATE
         if len(cm.kind):
-            failed = contact_substep(cm, fp, ip, body, (masses[0], masses[2]), borrowed_start, sleep,
+            failed = contact_substep(cm, fp, ip, body, (masses[0], masses[2]), start, sleep,
                                      warm, events, h, dt, sub == 0, sub == substeps - 1, cap,
-                                     prof)
+                                     store, prof)
             if failed >= 0:
                 return failed
-        keep_alive(start)
     return -1
 
 
 @njit(cache=True)
 def run_steps(n, substeps, dt, code, idata, body, loads, masses, work, contacts, warm_keys,
-              warm_values, event_ints, event_floats, event_counts, adaptive, prof):
+              warm_values, event_ints, event_floats, event_counts, scratch, adaptive, prof):
     """Up to n steps; (steps done, failed stage or -1). `contacts` = (contact
-    model, float and int parameters, sleep state, row-count guess); the warm
+    model, float and int parameters, sleep state, scratch counts); the warm
     cache and the event log's typed lists come as arguments of their own
     (numba types a tuple holding typed lists anew on every call, which costs
-    tens of microseconds; alone, a list costs well under one). `adaptive` is
+    tens of microseconds; alone, a list costs well under one), and so does the
+    contact stages' scratch store (collision/scratch.py). `adaptive` is
     adaptive.adaptive_data's tuple (unused_adaptive() for a fixed integrator)."""
     cm, fp, ip, sleep, cap = borrow(contacts)
-    packed = (cm, fp, ip, sleep, (warm_keys, warm_values),
-              (event_ints, event_floats, event_counts), cap)
+    lists = borrow((warm_keys, warm_values, event_ints, event_floats, event_counts, scratch))
+    packed = (cm, fp, ip, sleep, (lists[0], lists[1]), (lists[2], lists[3], lists[4]), cap,
+              lists[5])
     idata, body, loads, masses, work, adaptive, prof = borrow((idata, body, loads, masses, work,
                                                                adaptive, prof))
     for k in range(n):
@@ -104,7 +119,7 @@ def _read_only(a):
 
 
 def no_contacts():
-    """(contacts, warm cache, event state) of a scene without the contacts effect.
+    """(contacts, warm cache, event state, scratch) of a scene without the contacts effect.
     The arrays a real ContactModel takes from the model (material onwards) are
     read-only there, so they are here too: the step then has the same Numba
     types with or without contacts and loads the kernels `make install`
@@ -116,5 +131,5 @@ def no_contacts():
     cm = ContactModel(np.zeros(0, np.int64), np.zeros((0, 8)), np.zeros(0, np.bool_), z,
                       _read_only(np.zeros(0, np.int64)), _read_only(np.zeros(0)), _read_only(np.zeros(0)),
                       _read_only(np.zeros((0, 3))), _read_only(np.zeros((1, 1))), _read_only(np.zeros((1, 1))))
-    return ((cm, np.zeros(N_FP), np.zeros(N_IP, np.int64), new_sleep_state(0), np.zeros(1, np.int64)),
-            new_warm_cache(), new_event_state())
+    return ((cm, np.zeros(N_FP), np.zeros(N_IP, np.int64), new_sleep_state(0), new_counts(0)),
+            new_warm_cache(), new_event_state(), new_scratch())

@@ -122,14 +122,15 @@ class World(CommandsMixin, ReadingMixin):
     def _run(self, n):
         s, flags = self.state, self._flags
         flags[0], flags[1] = s.has_user_force, s.has_user_torque
-        contacts, (warm_keys, warm_values), (ints, floats, counts) = (
+        contacts, (warm_keys, warm_values), (ints, floats, counts), scratch = (
             self.contact_system.args() if self.contact_system is not None else _NO_CONTACTS)
         clear_call(self._adaptive[2])
         return run_steps(n, self.substeps, self.model.dt, self._code, self._idata,
                          (s.pos, s.quat, s.vel, s.omega, s.awake),
                          (s.user_force, s.user_force_offset, s.user_torque, flags),
                          (self._inv_mass, self.inertia, self.inv_inertia), self._work, contacts,
-                         warm_keys, warm_values, ints, floats, counts, self._adaptive, self._cycles)
+                         warm_keys, warm_values, ints, floats, counts, scratch, self._adaptive,
+                         self._cycles)
 
     def _seconds(self, cycles, steps=1):
         """{stage: seconds} from step_loop's prof slots (divided by `steps`)."""

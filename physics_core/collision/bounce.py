@@ -87,7 +87,7 @@ def bounce_friction(R, c, a, b, jn, vel, omega):
     return s1, s2
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def bounce_contact(R, I, c, threshold, ramp, h, w, vel, omega, vel_start, omega_start, target,
                    tau, J):
     """The pairwise bounce of contact c if it approaches and meets; True if it

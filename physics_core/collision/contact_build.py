@@ -13,19 +13,19 @@ overlap is removed by the position pass, never by adding velocity. A body
 the ccd stage moved back to its time of impact already sits at the start
 of its remaining motion, so there s0 = s_end.
 """
-import numpy as np
 from numba import njit
 
 from ..quaternion import row4, to_matrix_one
 from .contact_layout import (ARM_A, ARM_B, BIAS, BODY_A, BODY_B, DEPTH, DIR, E, G_TN, INV_MASS_A,
                              INV_MASS_B, K_A, K_B, LAM, MASS_N, MU, MU_K, MU_S, SLIDING, TURN_A,
                              TURN_B, U0, W_TN, W_TT, W_TT_INV)
+from .scratch import take_rows
 
 RESTITUTION_RULES = {"effective_mass": 0, "mean": 1, "min": 2, "max": 3}
 _TINY = 1e-30
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def world_inverse_inertia(q, inv_inertia, out):
     """out (3, 3) = I_w⁻¹ = R diag(I⁻¹) Rᵀ (COURSE.md 3)."""
     R = to_matrix_one(q)
@@ -35,7 +35,7 @@ def world_inverse_inertia(q, inv_inertia, out):
                          + R[i][2] * inv_inertia[2] * R[j][2])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def tangent_frame(R, c, nx, ny, nz):
     """Rows n, t1, t2 of contact c: an orthonormal basis from n alone (Duff et
     al. 2017, branch-free, never NaN for a unit n; friction.py)."""
@@ -74,7 +74,7 @@ def coupling(R, c, r, s):
     return (R[c, INV_MASS_A] * dd + wa) + (R[c, INV_MASS_B] * dd + wb)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def effective_masses(R, c):
     """1/W_nn, the tangent block and its inverse, W_tn and W_tt⁻¹ W_tn."""
     k_a = R[c, INV_MASS_A]
@@ -96,7 +96,7 @@ def effective_masses(R, c):
     R[c, G_TN], R[c, G_TN + 1] = i11 * t1n + i12 * t2n, i21 * t1n + i22 * t2n
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def row_velocity(R, c, r, a, b, vel, omega):
     """u_r = d_r·(v_b − v_a) + (r_b × d_r)·ω_b − (r_a × d_r)·ω_a."""
     u = 0.0
@@ -136,7 +136,7 @@ def touch_shift(depth, s0):
     return 0.5 * (depth - max(-s0, 0.0))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def contact_arms(R, c, i, j, point, depth, pos, vel, omega, iw_a, iw_b, h, rewound):
     """Lever arms of contact c (its frame already set) from each centre;
     returns s0, the pair's separation at the start of the substep (module
@@ -171,9 +171,10 @@ def contact_arms(R, c, i, j, point, depth, pos, vel, omega, iw_a, iw_b, h, rewou
 
 @njit(cache=True)
 def build_rows(R, I, a, b, point, normal, depth, pos, quat, vel, omega, inv_mass, inv_inertia,
-               material, mu_static, mu_kinetic, restitution, rule, h, toi):
-    """Fill R, I for the k contacts (a, b, point, normal, depth)."""
-    iw_a, iw_b = np.empty((3, 3)), np.empty((3, 3))
+               material, mu_static, mu_kinetic, restitution, rule, h, toi, store):
+    """Fill R, I for the k contacts (a, b, point, normal, depth); store: the
+    substep's scratch (scratch.py)."""
+    iw_a, iw_b = take_rows(store, 3, 3), take_rows(store, 3, 3)
     for c in range(len(a)):
         i, j = a[c], b[c]
         I[c, BODY_A], I[c, BODY_B], I[c, SLIDING] = i, j, 0

@@ -76,12 +76,15 @@ def contact_params(p, integrator="semi_implicit_euler"):
 
 
 def new_warm_cache():
-    """(keys, values): one-element typed lists, so compiled code can replace
-    the arrays (the contact set changes size) and the World keeps them."""
+    """(keys, values): typed lists, so compiled code can replace the arrays
+    (the contact set changes size) and the World keeps them. Item 0 is the
+    cache (ascending keys, their values); item 1 the buffers it is a view
+    of (warm_cache.warm_store fills them in place, growing them by doubling)."""
     keys = typed.List.empty_list(types.Array(types.int64, 1, "C"))
-    keys.append(np.zeros(0, np.int64))
     values = typed.List.empty_list(types.Array(types.float64, 2, "C"))
-    values.append(np.zeros((0, WARM_COLS)))
+    for _ in range(2):
+        keys.append(np.zeros(0, np.int64))
+        values.append(np.zeros((0, WARM_COLS)))
     return keys, values
 
 

@@ -10,7 +10,6 @@ cache, the sleep state and the event log's state.
 import numpy as np
 from numba import njit
 
-from ..borrowed import borrow
 from .bounce import add_bounces, collision_pass
 from .contact_build import build_rows
 from .contact_data import (CCD_ITERATIONS, CCD_THRESHOLD, CCD_TOLERANCE, CORRECTION_RATE,
@@ -19,10 +18,11 @@ from .contact_data import (CCD_ITERATIONS, CCD_THRESHOLD, CCD_TOLERANCE, CORRECT
                            RESTITUTION_THRESHOLD, RULE, SHOCK_ON, SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_ON,
                            SLEEP_TIME, SLOP, STATIC_SPEED, VELOCITY_TOLERANCE, WARM_FRACTION)
 from .contact_layout import BODY_A, BODY_B, DEPTH, ICOL, LAM, NCOL
-from .detection import detect_arrays
+from .detection import detect_scratch
 from .kinetic_drift import kinetic_velocity_change
 from .manifold_friction import anchor_friction_out, anchor_rows, anchor_warm_start
 from .push_out import correct
+from .scratch import take, take_bools, take_int_rows, take_ints, take_rows
 from .sequential_impulses import friction_and_slip, least_mass, solve_velocities, warm_start
 from .shock_propagation import shock_sweep
 from .sleep_islands import _sync, _update, _wake_touched
@@ -30,9 +30,10 @@ from .time_of_impact import rewind_fast_bodies
 from .warm_cache import warm_clear, warm_load, warm_store
 
 
-@njit(cache=True)
-def moving_bodies(is_static, awake):
-    out = np.empty(len(awake), np.bool_)
+@njit(cache=True, inline="always")
+def moving_bodies(is_static, awake, store):
+    """(n,) awake and dynamic, in scratch (scratch.py)."""
+    out = take_bools(store, len(awake))
     for i in range(len(awake)):
         out[i] = awake[i] and not is_static[i]
     return out
@@ -48,18 +49,18 @@ def solver_masses(cm, awake, inv_mass, inv_inertia):
             inv_inertia[i, j] = cm.inv_inertia[i, j] * w
 
 
-@njit(cache=True)
-def ccd_stage(cm, fp, ip, pos, quat, omega, awake, p0, q0, toi):
-    moving = moving_bodies(cm.is_static, awake)
+@njit(cache=True, inline="always")
+def ccd_stage(cm, fp, ip, pos, quat, omega, awake, p0, q0, toi, store):
+    moving = moving_bodies(cm.is_static, awake, store)
     return rewind_fast_bodies(cm.kind, cm.dims, cm.reach, cm.is_static, moving, p0, q0, pos, quat,
                               omega, fp[CCD_THRESHOLD], fp[MARGIN], ip[CCD_ITERATIONS],
-                              fp[CCD_TOLERANCE], toi)
+                              fp[CCD_TOLERANCE], toi, take_bools(store, len(pos)))
 
 
 @njit(cache=True)
-def kept_rows(moving, a, b):
-    """Indices of the contacts with a moving body (a static–sleeping pair rests)."""
-    keep = np.empty(len(a), np.int64)
+def kept_rows(moving, a, b, keep):
+    """Indices of the contacts with a moving body (a static–sleeping pair
+    rests), written into `keep` (at least len(a) long)."""
     k = 0
     for c in range(len(a)):
         if moving[a[c]] or moving[b[c]]:
@@ -68,46 +69,46 @@ def kept_rows(moving, a, b):
     return keep[:k]
 
 
-@njit(cache=True)
-def detect_stage(cm, fp, ip, pos, quat, awake, sleep, cap):
+@njit(cache=True, inline="always")
+def detect_stage(cm, fp, ip, pos, quat, awake, sleep, cap, store):
     """Contacts at the end-of-substep poses, sleeping bodies touched by a moving
     one woken (their islands too): (a, b, point, normal, depth, key, rows
     computed, woke)."""
     timer, island, prev_awake, next_island = sleep
     if ip[SLEEP_ON]:
         _sync(awake, timer, island, prev_awake)
-    (a, b, point, normal, depth, key), k = detect_arrays(cm.kind, cm.dims, cm.is_static, cm.reach,
-                                                         pos, quat, fp[MARGIN], cap)
+    (a, b, point, normal, depth, key), k = detect_scratch(cm.kind, cm.dims, cm.is_static, cm.reach,
+                                                          pos, quat, fp[MARGIN], cap, store)
     woke = False
     if ip[SLEEP_ON] and len(a):
         woke = _wake_touched(awake, cm.is_static, a, b, fp[SLEEP_TIME], timer, island,
                              prev_awake)
-    keep = kept_rows(moving_bodies(cm.is_static, awake), a, b)
+    keep = kept_rows(moving_bodies(cm.is_static, awake, store), a, b,
+                     take_ints(store, len(a)))
     if len(keep) < len(a):
         a, b, point, normal = a[keep], b[keep], point[keep], normal[keep]
         depth, key = depth[keep], key[keep]
     return a, b, point, normal, depth, key, k, woke
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def rows_stage(cm, fp, ip, contacts, pos, quat, vel, omega, inv_mass, inv_inertia, warm, toi, h,
-               v0, w0):
+               v0, w0, store):
     """The contact rows (R, I) of the detected contacts, their impulses loaded
     from the warm cache (applied by restitution_stage), and the manifolds'
     friction anchors (M, MI) (manifold_friction.py); v0, w0 the
     start-of-substep velocities (a new contact's friction regime)."""
     a, b, point, normal, depth, key = contacts
-    made = (np.empty((len(a), NCOL)), np.empty((len(a), ICOL), np.int64))
-    R, I = borrow(made)                            # physics_core/borrowed.py
+    R, I = take_rows(store, len(a), NCOL), take_int_rows(store, len(a), ICOL)
     build_rows(R, I, a, b, point, normal, depth, pos, quat, vel, omega, inv_mass, inv_inertia,
-               cm.material, cm.mu_static, cm.mu_kinetic, cm.restitution, ip[RULE], h, toi)
+               cm.material, cm.mu_static, cm.mu_kinetic, cm.restitution, ip[RULE], h, toi, store)
     warm_load(R, I, key, warm[0], warm[1], fp[WARM_FRACTION], fp[STATIC_SPEED], v0, w0)
-    M, MI = anchor_rows(R, I, point, pos, quat, inv_inertia, toi, h)
-    return made[0], made[1], M, MI
+    M, MI = anchor_rows(R, I, point, pos, quat, inv_inertia, toi, h, store)
+    return R, I, M, MI
 
 
-@njit(cache=True)
-def restitution_stage(fp, ip, R, I, M, MI, vel, omega, v0, w0, h):
+@njit(cache=True, inline="always")
+def restitution_stage(fp, ip, R, I, M, MI, vel, omega, v0, w0, h, store):
     """Warm start (the rows' loaded impulses applied), then the collision pass
     (bounce.py), v0, w0 the start-of-substep velocities: (target, τ, J) of
     every contact. The correct stage moves
@@ -116,14 +117,14 @@ def restitution_stage(fp, ip, R, I, M, MI, vel, omega, v0, w0, h):
     if k and fp[WARM_FRACTION] > 0.0:
         warm_start(R, I, vel, omega)
         anchor_warm_start(M, MI, I, vel, omega)
-    target, tau, J = np.empty(k), np.empty(k), np.empty((k, 3))
+    target, tau, J = take(store, k), take(store, k), take_rows(store, k, 3)
     collision_pass(R, I, vel, omega, v0, w0, fp[RESTITUTION_THRESHOLD], fp[RESTITUTION_RAMP], h,
                    fp[END_WEIGHT], ip[RESTITUTION_ITERATIONS], target, tau, J)
     return target, tau, J
 
 
-@njit(cache=True)
-def solve_stage(fp, ip, R, I, M, MI, key, vel, omega, warm, J, masses):
+@njit(cache=True, inline="always")
+def solve_stage(fp, ip, R, I, M, MI, key, vel, omega, warm, J, masses, store):
     """Sequential-impulse sweeps (the rows come warm-started), the solve's
     impulses kept in the warm cache, then the shock-propagation sweep
     (shock_propagation.py) and the collision pass's J added to λ. Returns
@@ -131,12 +132,11 @@ def solve_stage(fp, ip, R, I, M, MI, key, vel, omega, warm, J, masses):
     and the velocity change of friction at its kinetic bound (kinetic_drift.py)."""
     if len(R) == 0:
         warm_clear(warm[0], warm[1])
-        return np.zeros((0, 3)), 0, np.zeros((0, 3))
+        return take_rows(store, 0, 3), 0, take_rows(store, 0, 3)
     # an impulse change dλ moves a row's relative velocity by about dλ / m_eff
     limit = fp[VELOCITY_TOLERANCE] * least_mass(R) if fp[VELOCITY_TOLERANCE] > 0.0 else -1.0
     sweeps = solve_velocities(R, I, M, MI, vel, omega, ip[ITERATIONS], limit)
-    friction = np.empty((len(R), 3))
-    slip = np.empty(len(R))
+    friction, slip = take_rows(store, len(R), 3), take(store, len(R))
     friction_and_slip(R, I, vel, omega, friction, slip)
     anchor_friction_out(R, M, MI, friction)
     warm_store(warm[0], warm[1], key, R, friction, slip)
@@ -144,18 +144,19 @@ def solve_stage(fp, ip, R, I, M, MI, key, vel, omega, warm, J, masses):
     # a looser stop let the 20-stack's top creep 1.4 mm a second
     settle = 0.01 * fp[VELOCITY_TOLERANCE]
     if ip[SHOCK_ON] and shock_sweep(R, I, M, MI, vel, omega, len(vel), ip[SHOCK_ON], settle,
-                                    masses):
+                                    masses, store):
         friction_and_slip(R, I, vel, omega, friction, slip)
         anchor_friction_out(R, M, MI, friction)
-    slide = kinetic_velocity_change(R, I, M, MI, len(vel))
+    slide = kinetic_velocity_change(R, I, M, MI, len(vel), store)
     add_bounces(R, J, friction)
     return friction, sweeps, slide
 
 
-@njit(cache=True)
-def correct_stage(fp, ip, R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, slide, h):
+@njit(cache=True, inline="always")
+def correct_stage(fp, ip, R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, slide, h,
+                  store):
     correct(R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, slide, h, fp[SLOP],
-            fp[CORRECTION_RATE], fp[MAX_CORRECTION_SPEED], ip[POSITION_ITERATIONS])
+            fp[CORRECTION_RATE], fp[MAX_CORRECTION_SPEED], ip[POSITION_ITERATIONS], store)
 
 
 @njit(cache=True)

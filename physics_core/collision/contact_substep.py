@@ -6,7 +6,6 @@ pass, bounce.py), solve, correct, events, and sleep on the step's last
 substep (see __init__). `run` returns -1, or the index of the stage after which some body's state was not
 finite (the caller names it and the bodies).
 """
-import numpy as np
 from numba import njit
 
 from ..borrowed import borrow, keep_alive
@@ -19,128 +18,150 @@ from .contact_stages import (ccd_stage, correct_stage, detect_stage, moving_bodi
                              restitution_stage, rows_stage, sleep_stage, solve_stage,
                              solver_masses)
 from .event_log import events_add, events_finish, events_reset
+from .scratch import ROW_GUESS, take, take_bools, take_rows
 from .time_of_impact import rewind_bodies
 
 CCD, COLLIDE, RESTITUTION, SOLVE, CORRECT, EVENTS, SLEEP, N_STAGES = range(8)
 STAGE_NAMES = ("ccd", "collide", "restitution", "solve", "correct", "events", "sleep")
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _finite(pos, quat, vel, omega):
     return all_finite(pos, quat, vel, omega)
 
 
-@njit(cache=True)
-def _collide(cm, fp, ip, s, masses, start, sleep, warm, toi, h, cap):
+@njit(cache=True, inline="always")
+def _collide(cm, fp, ip, s, masses, start, sleep, warm, toi, h, cap, store):
     """collide: detection, waking, rows; (contacts, R, I, M, MI, rows computed)."""
     pos, quat, vel, omega, awake = s
     a, b, point, normal, depth, key, k, woke = detect_stage(cm, fp, ip, pos, quat, awake, sleep,
-                                                            cap)
+                                                            cap, store)
     if woke:
         solver_masses(cm, awake, masses[0], masses[1])
     contacts = (a, b, point, normal, depth, key)
     R, I, M, MI = rows_stage(cm, fp, ip, borrow(contacts), pos, quat, vel, omega, masses[0],
-                             masses[1], warm, toi, h, start[2], start[3])
+                             masses[1], warm, toi, h, start[2], start[3], store)
     return contacts, R, I, M, MI, k
 
 
-@njit(cache=True)
-def _correct(cm, fp, ip, R, I, s, vel0, omega0, target, tau, toi, slide, h):
+@njit(cache=True, inline="always")
+def _correct(cm, fp, ip, R, I, s, vel0, omega0, target, tau, toi, slide, h, store):
     """correct, then the rest of the substep of the bodies ccd moved back,
     searched like a whole substep (time_of_impact.py)."""
     pos, quat, vel, omega, awake = s
-    rewound = toi >= 0.0
-    again = rewound.any()
+    rewound = take_bools(store, len(toi))
+    again = False
+    for i in range(len(toi)):
+        rewound[i] = toi[i] >= 0.0
+        again |= rewound[i]
     p_impact = pos.copy() if again else pos[:0]
     q_impact = quat.copy() if again else quat[:0]
-    correct_stage(fp, ip, R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, slide, h)
+    correct_stage(fp, ip, R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, slide, h,
+                  store)
     if again:
         rewind_bodies(cm.kind, cm.dims, cm.reach, cm.is_static, rewound, p_impact, q_impact,
                       pos, quat, omega, fp[CCD_THRESHOLD], fp[MARGIN], ip[CCD_ITERATIONS],
                       fp[CCD_TOLERANCE], toi)
 
 
-@njit(cache=True)
-def _events(events, contacts, R, friction, moving_mask, last):
+@njit(cache=True, inline="always")
+def _events(events, contacts, R, friction, moving_mask, last, store):
     a, b, point, normal, depth, key = contacts
     if len(R):
-        events_add(events, key, a, b, point, normal, depth, np.ascontiguousarray(R[:, LAM]),
-                   friction, -np.ascontiguousarray(R[:, U0]))
+        lam, speed = take(store, len(R)), take(store, len(R))
+        for c in range(len(R)):
+            lam[c] = R[c, LAM]
+            speed[c] = -R[c, U0]
+        events_add(events, key, a, b, point, normal, depth, lam, friction, speed)
     if last:
         events_finish(events, moving_mask)
 
 
+@njit(cache=True, inline="always")
+def _any_rewound(toi):
+    for i in range(len(toi)):
+        if toi[i] >= 0.0:
+            return True
+    return False
+
+
+@njit(cache=True, inline="always")
+def _velocities(vel, omega, moves, store):
+    """Copies of vel and omega in scratch (collision/scratch.py); empty when not `moves`."""
+    k = len(vel) if moves else 0
+    v, w = take_rows(store, k, 3), take_rows(store, k, 3)
+    if moves:
+        v[:] = vel
+        w[:] = omega
+    return v, w
+
+
 @njit(cache=True)
-def run(cm, fp, ip, s, masses, start, sleep, warm, events, h, dt, first, last, cap, prof):
+def run(cm, fp, ip, s, masses, start, sleep, warm, events, h, dt, first, last, cap, store, prof):
     """The contact stages of one substep; -1 or the failing stage. s = (pos,
     quat, vel, omega, awake); start = the same four at the start of the
     substep; masses = the solver's (inv_mass, inv_inertia),
-    updated here when bodies wake or sleep; cap[0]: row-count guess, updated."""
+    updated here when bodies wake or sleep; cap: scratch.py's counts (the
+    row-count guess updated here); store: the substep's scratch (scratch.py),
+    whose views need no keep_alive."""
     pos, quat, vel, omega, awake = s
-    # the arrays made here are passed down borrowed (borrowed.py) and kept
-    # alive by the keep_alive calls at the end
-    toi_owned = np.full(len(pos), -1.0)
-    toi = borrow(toi_owned)
+    toi = take(store, len(pos))
+    toi[:] = -1.0
     if first:
         events_reset(events)
     if ip[CCD_ON]:
         t = cycles()
-        ccd_stage(cm, fp, ip, pos, quat, omega, awake, start[0], start[1], toi)
+        ccd_stage(cm, fp, ip, pos, quat, omega, awake, start[0], start[1], toi, store)
         prof[CCD] += cycles() - t
         if not _finite(pos, quat, vel, omega):
             return CCD
     t = cycles()
-    made = _collide(cm, fp, ip, s, masses, start, sleep, warm, toi, h, cap[0])
+    made = _collide(cm, fp, ip, s, masses, start, sleep, warm, toi, h, cap[ROW_GUESS], store)
     rows = borrow(made)
-    cap[0] = rows[5] + rows[5] // 8 + 4
+    cap[ROW_GUESS] = rows[5] + rows[5] // 8 + 4
     # with no contact and no body moved back, the solve changes no velocity
     # and the correct stage has nothing to move: it is skipped
-    moves = len(rows[1]) > 0 or (toi >= 0.0).any()
-    before = (vel.copy(), omega.copy()) if moves else (vel[:0], omega[:0])
+    moves = len(rows[1]) > 0 or _any_rewound(toi)
+    before = _velocities(vel, omega, moves, store)
     prof[COLLIDE] += cycles() - t
     failed = _respond(cm, fp, ip, s, masses, start, sleep, warm, events, h, dt, last, prof, rows,
-                      toi, borrow(before), moves)
-    keep_alive(toi_owned)
+                      toi, before, moves, store)
     keep_alive(made)
-    keep_alive(before)
     return failed
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _respond(cm, fp, ip, s, masses, start, sleep, warm, events, h, dt, last, prof, rows, toi,
-             before, moves):
+             before, moves, store):
     """restitution, solve, correct, events and sleep on the collide stage's
     rows = (contacts, R, I, M, MI, k); -1 or the failing stage."""
     pos, quat, vel, omega, awake = s
     contacts, R, I, M, MI, _ = rows
     t = cycles()
-    bounced = restitution_stage(fp, ip, R, I, M, MI, vel, omega, start[2], start[3], h)
-    target, tau, J = borrow(bounced)
+    target, tau, J = restitution_stage(fp, ip, R, I, M, MI, vel, omega, start[2], start[3], h,
+                                       store)
     prof[RESTITUTION] += cycles() - t
     if not _finite(pos, quat, vel, omega):
         return RESTITUTION
     t = cycles()
-    solved = solve_stage(fp, ip, R, I, M, MI, contacts[5], vel, omega, warm, J,
-                         (masses[0], masses[1], quat))
+    friction, _, slide = solve_stage(fp, ip, R, I, M, MI, contacts[5], vel, omega, warm, J,
+                                     (masses[0], masses[1], quat), store)
     prof[SOLVE] += cycles() - t
     if not _finite(pos, quat, vel, omega):
         return SOLVE
     t = cycles()
     if moves:
-        _correct(cm, fp, ip, R, I, s, before[0], before[1], target, tau, toi, solved[2], h)
+        _correct(cm, fp, ip, R, I, s, before[0], before[1], target, tau, toi, slide, h, store)
     prof[CORRECT] += cycles() - t
     if not _finite(pos, quat, vel, omega):
         return CORRECT
     t = cycles()
-    moving = moving_bodies(cm.is_static, awake)
-    _events(events, contacts, R, borrow(solved[0]), borrow(moving), last)
+    moving = moving_bodies(cm.is_static, awake, store)
+    _events(events, contacts, R, friction, moving, last, store)
     prof[EVENTS] += cycles() - t
     if last and ip[SLEEP_ON]:
         t = cycles()
         if sleep_stage(cm, fp, R, I, awake, vel, omega, sleep, dt):
             solver_masses(cm, awake, masses[0], masses[1])
         prof[SLEEP] += cycles() - t
-    keep_alive(bounced)
-    keep_alive(solved)
-    keep_alive(moving)
     return -1

@@ -15,6 +15,7 @@ from .contact_data import contact_model, contact_params, new_sleep_state, new_wa
 from .contact_substep import STAGE_NAMES
 from .event_log import events_bodies_changed, events_output, new_event_state
 from .manifold import SLOTS
+from .scratch import new_counts, new_scratch
 from .warm_cache import remap_warm_cache
 
 
@@ -38,11 +39,13 @@ class ContactSystem:
         self.warm = new_warm_cache()
         self.sleep = new_sleep_state(n)
         self.events_state = new_event_state()
-        self.cap = np.full(1, 16, np.int64)
+        self.cap = new_counts()
+        self.scratch = new_scratch()
 
     def args(self):
-        """(contacts, warm cache, event state): step_loop.run_steps' arguments."""
-        return ((self.cm, self.fp, self.ip, self.sleep, self.cap), self.warm, self.events_state)
+        """(contacts, warm cache, event state, scratch): step_loop.run_steps' arguments."""
+        return ((self.cm, self.fp, self.ip, self.sleep, self.cap), self.warm, self.events_state,
+                self.scratch)
 
     def events(self):
         return events_output(self.events_state)
@@ -56,6 +59,7 @@ class ContactSystem:
         self.events_state = old.events_state
         events_bodies_changed(self.events_state, n_old, n_new, new_index)
         self.cap = old.cap
+        self.scratch = old.scratch      # grown as needed: any size serves
 
 
 

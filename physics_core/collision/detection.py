@@ -23,10 +23,11 @@ from numba import njit
 
 from ..borrowed import borrow, keep_alive
 from ..errors import NonFiniteStateError
-from .box_pair import box_box, separation, workspace
+from .box_pair import WS_ROWS, box_box, separation, workspace
 from .geometry import BOX, PLANE, Geometry
-from .grid import candidate_pairs, finite_poses
+from .grid import candidate_pairs, finite_poses, scratch_pairs
 from .manifold import SLOTS, Manifold
+from .scratch import take, take_ints, take_rows
 from .shape_pairs import (DEPTH, NORMAL_COL, POINT, ROW, SLOT, box_sphere, plane_box, plane_sphere,
                           sphere_sphere)
 
@@ -89,13 +90,18 @@ def pair_rows(a, b, kind, dims, pos, quat, margin, ws, rows, k):
 
 @njit(cache=True)
 def narrow_rows(pairs, kind, dims, pos, quat, margin, cap):
-    """(rows, row_pair, k): every pair's rows, in pair order, with its pair's
-    index. The buffers grow between chunks of pairs that surely fit, never
-    inside the loop over pairs: a numba array variable reassigned in a loop
-    costs reference-count updates on every iteration (about 3× a sphere pair)."""
+    """(rows, row_pair, k): every pair's rows, in pair order, with its pair's index."""
     rows = np.empty((max(cap, 16), ROW))
-    row_pair = np.empty(len(rows), np.int64)
-    ws = workspace()
+    return fill_rows(pairs, kind, dims, pos, quat, margin, workspace(), rows,
+                     np.empty(len(rows), np.int64))
+
+
+@njit(cache=True)
+def fill_rows(pairs, kind, dims, pos, quat, margin, ws, rows, row_pair):
+    """narrow_rows into the given buffers (ws zeroed). The buffers grow between
+    chunks of pairs that surely fit, never inside the loop over pairs: a numba
+    array variable reassigned in a loop costs reference-count updates on every
+    iteration (about 3× a sphere pair)."""
     k = p = 0
     while p < len(pairs):
         if k + MAX_ROWS_PER_PAIR > len(rows):
@@ -134,13 +140,28 @@ def chunk_rows(pairs, start, stop, kind, dims, pos, quat, margin, ws, rows, row_
 
 
 @njit(cache=True)
-def manifold_arrays(rows, row_pair, k, pairs, margin, n):
-    """(a, b, point, normal, depth, key) of the rows with depth > -margin."""
+def kept_count(rows, k, margin):
+    """How many of the first k rows have depth > -margin."""
     kept = 0
     for r in range(k):
         kept += rows[r, DEPTH] > -margin
-    a, b, key = np.empty(kept, np.int64), np.empty(kept, np.int64), np.empty(kept, np.int64)
-    point, normal, depth = np.empty((kept, 3)), np.empty((kept, 3)), np.empty(kept)
+    return kept
+
+
+@njit(cache=True)
+def manifold_arrays(rows, row_pair, k, pairs, margin, n):
+    """(a, b, point, normal, depth, key) of the rows with depth > -margin."""
+    kept = kept_count(rows, k, margin)
+    out = (np.empty(kept, np.int64), np.empty(kept, np.int64), np.empty((kept, 3)),
+           np.empty((kept, 3)), np.empty(kept), np.empty(kept, np.int64))
+    fill_manifold(rows, row_pair, k, pairs, margin, n, borrow(out))
+    return out
+
+
+@njit(cache=True)
+def fill_manifold(rows, row_pair, k, pairs, margin, n, out):
+    """manifold_arrays into out = (a, b, point, normal, depth, key), sized to the kept rows."""
+    a, b, point, normal, depth, key = out
     w = 0
     for r in range(k):
         if rows[r, DEPTH] > -margin:
@@ -152,7 +173,6 @@ def manifold_arrays(rows, row_pair, k, pairs, margin, n):
                                                         rows[r, NORMAL_COL + 2])
             depth[w] = rows[r, DEPTH]
             w += 1
-    return a, b, point, normal, depth, key
 
 
 @njit(cache=True)
@@ -172,6 +192,33 @@ def detect_arrays(kind, dims, is_static, reach, pos, quat, margin, cap):
     keep_alive(found)
     keep_alive(pairs_owned)
     return out, k
+
+
+@njit(cache=True, inline="always")
+def detect_scratch(kind, dims, is_static, reach, pos, quat, margin, cap, store):
+    """detect_arrays for the step loop: the same contacts, in views of the
+    scratch store (scratch.py), valid until the next substep's detection."""
+    if not finite_poses(kind, pos, quat):
+        return _scratch_contacts(store, 0), -1
+    pairs = scratch_pairs(kind, dims, is_static, reach, pos, quat, margin, store)
+    rows = take_rows(store, max(cap, 16), ROW)
+    ws = take_rows(store, WS_ROWS, 8)
+    ws[:] = 0.0
+    found = fill_rows(pairs, kind, dims, pos, quat, margin, ws, rows,
+                      take_ints(store, len(rows)))
+    rows, row_pair, k = borrow(found)
+    out = _scratch_contacts(store, kept_count(rows, k, margin))
+    fill_manifold(rows, row_pair, k, pairs, margin, len(kind), out)
+    keep_alive(found)
+    return out, k
+
+
+@njit(cache=True, inline="always")
+def _scratch_contacts(store, kept):
+    """(a, b, point, normal, depth, key) views of `kept` rows."""
+    return (take_ints(store, kept), take_ints(store, kept),
+            take_rows(store, kept, 3), take_rows(store, kept, 3),
+            take(store, kept), take_ints(store, kept))
 
 
 class Detector:

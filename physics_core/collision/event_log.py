@@ -48,6 +48,7 @@ import numpy as np
 from numba import njit
 from numba.typed import List
 
+from ..borrowed import borrow
 from ..contact_events import BEGIN, END, PERSIST, ContactEvents
 from .manifold import SLOTS
 from .warm_cache import remap_keys
@@ -377,10 +378,13 @@ def _grow(ints, flts, counts, need):
 @njit(cache=True, inline="always")
 def _room(ints, flts, counts, need):
     """The state's arrays, grown first if a region holds fewer than `need`
-    rows (the capacity is kept in counts: no list access to check it)."""
+    rows (the capacity is kept in counts: no list access to check it);
+    borrowed (physics_core/borrowed.py): the lists keep them, and nothing
+    replaces them before the caller is done, so the views sliced from them
+    count no references."""
     if need > counts[CAP]:
         _grow(ints, flts, counts, need)
-    return ints[0], flts[0]
+    return borrow((ints[0], flts[0]))
 
 
 @njit(cache=True, inline="always")

@@ -35,6 +35,7 @@ from numba import njit
 from ..borrowed import borrow, keep_alive
 from .geometry import (BOX, HALF, NORMAL, OFFSET, PLANE, RADIUS, dot_lanes, dot_seq, fma,
                        quat_matrix)
+from .scratch import PAIR_GUESS, empty_store, take, take_bools, take_int_rows, take_ints, take_rows
 
 SMALL_FACTOR = 4.0          # a body more than this × the median AABB extent is "large"
 MAX_CELLS = 2 ** 20         # grid cells per axis at most; a wider scene gets a coarser grid
@@ -58,11 +59,10 @@ def box_half_extent(quat, dims, b):
 
 
 @njit(cache=True)
-def solid_table(kind, dims, reach, pos, quat, margin, solid):
-    """(m, COLS) margin-grown AABB, centre and bounding radius of each solid
-    (non-plane) body (broadphase.solid_columns)."""
+def solid_table(kind, dims, reach, pos, quat, margin, solid, cols):
+    """cols (m, COLS): margin-grown AABB, centre and bounding radius of each
+    solid (non-plane) body (broadphase.solid_columns)."""
     grow = 0.5 * margin
-    cols = np.empty((len(solid), COLS))
     for r in range(len(solid)):
         b = solid[r]
         rad = dims[b, RADIUS]
@@ -76,7 +76,7 @@ def solid_table(kind, dims, reach, pos, quat, margin, solid):
     return cols
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def overlaps(cols, p, q):
     """Rows p, q pass broadphase._filter: bounding spheres, then boxes (touching counts)."""
     d = cols[p, CEN] - cols[q, CEN]
@@ -118,14 +118,19 @@ def manifold_order(i, j, static_i, static_j):
 
 @njit(cache=True)
 def sort_pairs(pairs, k, n):
-    """Rows 0..k of `pairs` sorted by pair id min n + max: a counting sort on
-    the lower index, then insertion sort within each (short) run."""
-    start = np.zeros(n + 2, np.int64)
+    """Rows 0..k of `pairs` sorted by pair id min n + max (a new array)."""
+    return sort_into(pairs, k, np.zeros(n + 2, np.int64), np.empty((k, 2), np.int64))
+
+
+@njit(cache=True)
+def sort_into(pairs, k, start, out):
+    """sort_pairs into `out` (k, 2): a counting sort on the lower index
+    (`start`: n + 2 zeros), then insertion sort within each (short) run."""
+    n = len(start) - 2
     for r in range(k):
         start[min(pairs[r, 0], pairs[r, 1]) + 2] += 1
     for i in range(n + 1):
         start[i + 1] += start[i]
-    out = np.empty((k, 2), np.int64)
     for r in range(k):
         lo = min(pairs[r, 0], pairs[r, 1])
         at = start[lo + 1]
@@ -153,17 +158,25 @@ def _sort_run(out, s, e):
 # ---- the grid ---------------------------------------------------------------------------
 
 @njit(cache=True)
-def _classify(cols):
+def _classify(cols, store):
     """(small rows, large rows, cell edge): small bodies are at most
     SMALL_FACTOR × the median AABB extent; the cell is the largest small extent."""
     m = len(cols)
-    size = np.empty(m)
+    size = take(store, m)
     for r in range(m):
         size[r] = max(cols[r, HI] - cols[r, LO], cols[r, HI + 1] - cols[r, LO + 1],
                       cols[r, HI + 2] - cols[r, LO + 2])
     limit = SMALL_FACTOR * np.median(size)
-    small = np.flatnonzero(size <= limit)
-    large = np.flatnonzero(~(size <= limit))
+    small, large = take_ints(store, m), take_ints(store, m)
+    s = g = 0
+    for r in range(m):
+        if size[r] <= limit:
+            small[s] = r
+            s += 1
+        else:
+            large[g] = r
+            g += 1
+    small, large = small[:s], large[:g]
     cell = 0.0
     for r in small:
         cell = max(cell, size[r])
@@ -171,20 +184,25 @@ def _classify(cols):
 
 
 @njit(cache=True)
-def _cell_edge(cols, rows, cell):
+def _cell_edge(cols, rows, cell, store):
     """(edge, origin (3,), dims (3,)): the grid cell edge, grown by the slack and
     coarsened so no axis has more than MAX_CELLS cells; one empty cell of
-    padding on each side so neighbour keys never wrap round an axis."""
-    lo = np.full(3, np.inf)
-    hi = np.full(3, -np.inf)
+    padding on each side so neighbour keys never wrap round an axis. The
+    centres are finite (finite_poses), so the maxima below are numpy's."""
+    lo, hi = take(store, 3), take(store, 3)
+    lo[:] = np.inf
+    hi[:] = -np.inf
     for r in rows:
         for a in range(3):
             lo[a] = min(lo[a], cols[r, CEN + a])
             hi[a] = max(hi[a], cols[r, CEN + a])
-    scale = max(np.abs(lo).max(), np.abs(hi).max())
+    scale = spread = 0.0
+    for a in range(3):
+        scale = max(scale, abs(lo[a]), abs(hi[a]))
+        spread = max(spread, hi[a] - lo[a])
     edge = cell * (1.0 + CELL_SLACK) + 8e-16 * scale
-    edge = max(edge, (hi - lo).max() / MAX_CELLS, 1e-300)
-    dims = np.empty(3, np.int64)
+    edge = max(edge, spread / MAX_CELLS, 1e-300)
+    dims = take_ints(store, 3)
     for a in range(3):
         dims[a] = _cell_index((hi[a] - lo[a]) / edge, MAX_CELLS) + 3
     return edge, lo, dims
@@ -199,9 +217,8 @@ def _cell_index(x, top):
 
 
 @njit(cache=True)
-def _cell_keys(cols, rows, edge, origin, dims):
-    """Linear cell index of each row's centre (x slowest, z fastest)."""
-    keys = np.empty(len(rows), np.int64)
+def _cell_keys(cols, rows, edge, origin, dims, keys):
+    """keys: linear cell index of each row's centre (x slowest, z fastest)."""
     for s in range(len(rows)):
         key = 0
         for a in range(3):
@@ -212,9 +229,8 @@ def _cell_keys(cols, rows, edge, origin, dims):
 
 
 @njit(cache=True)
-def forward_offsets(dims):
-    """Key offsets of the 13 neighbour cells after a cell in (x, y, z) order."""
-    out = np.empty(13, np.int64)
+def forward_offsets(dims, out):
+    """out (13,): key offsets of the neighbour cells after a cell in (x, y, z) order."""
     k = 0
     for dx in range(-1, 2):
         for dy in range(-1, 2):
@@ -226,15 +242,16 @@ def forward_offsets(dims):
 
 
 @njit(cache=True)
-def _dense_index(keys, ncell):
+def _dense_index(keys, ncell, store):
     """Counting sort of the keys: (order, first) with the rows of cell c at
     order[first[c]:first[c + 1]], in row order within a cell."""
-    first = np.zeros(ncell + 2, np.int64)
+    first = take_ints(store, ncell + 2)
+    first[:] = 0
     for key in keys:
         first[key + 2] += 1
     for c in range(ncell + 1):
         first[c + 1] += first[c]
-    order = np.empty(len(keys), np.int64)
+    order = take_ints(store, len(keys))
     for s in range(len(keys)):
         order[first[keys[s] + 1]] = s
         first[keys[s] + 1] += 1
@@ -242,12 +259,15 @@ def _dense_index(keys, ncell):
 
 
 @njit(cache=True)
-def _sparse_index(keys):
+def _sparse_index(keys, store):
     """(order, first, cells): rows sorted by key; the occupied cells' keys,
-    and their rows at order[first[u]:first[u + 1]]."""
-    order = np.argsort(keys, kind="mergesort")
-    cells = np.empty(len(keys), np.int64)
-    first = np.empty(len(keys) + 1, np.int64)
+    and their rows at order[first[u]:first[u + 1]]. In scratch: the sweep
+    reads them once per body and cell, and an owned array there would cost
+    reference counts on every read."""
+    order = take_ints(store, len(keys))
+    order[:] = np.argsort(keys, kind="mergesort")
+    cells = take_ints(store, len(keys))
+    first = take_ints(store, len(keys) + 1)
     u = 0
     for s in range(len(keys)):
         key = keys[order[s]]
@@ -259,7 +279,7 @@ def _sparse_index(keys):
     return order, first[:u + 1], cells[:u]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _sparse_span(first, cells, key):
     """[start, end) of cell `key` among the occupied `cells` (sorted keys)."""
     u = np.searchsorted(cells, key)
@@ -268,25 +288,36 @@ def _sparse_span(first, cells, key):
 
 
 @njit(cache=True)
-def _grid_pairs(cols, ids, small, cell, is_static, pairs, k):
+def _grid_pairs(cols, ids, small, cell, is_static, pairs, k, store):
     """Pairs among the small rows: each body against the later bodies of its
     own cell and every body of its 13 forward neighbour cells."""
-    edge, origin, dims = _cell_edge(cols, small, cell)
-    keys = _cell_keys(cols, small, edge, origin, dims)
+    edge, origin, dims = _cell_edge(cols, small, cell, store)
+    keys = _cell_keys(cols, small, edge, origin, dims, take_ints(store, len(small)))
     ncell = dims[0] * dims[1] * dims[2]
     if ncell <= DENSE_CELLS_PER_BODY * len(small) + DENSE_SPARE:
-        order, first = _dense_index(keys, ncell)
-        cells = np.zeros(0, np.int64)
+        order, first = _dense_index(keys, ncell, store)
+        cells = take_ints(store, 0)
     else:
-        order, first, cells = _sparse_index(keys)
-    rows = small[order]                       # rows in cell order: neighbours close in memory
-    body = ids[rows]
-    # the sweep's inputs made here go down borrowed (physics_core/borrowed.py)
-    owned = (cols[rows], body, is_static[body], keys[order], first, cells, forward_offsets(dims))
-    sc, body_b, static, key, first_b, cells_b, fwd = borrow(owned)
-    out = _sweep_cells(sc, body_b, static, key, first_b, cells_b, fwd, pairs, k)
-    keep_alive(owned)
-    return out
+        order, first, cells = _sparse_index(keys, store)
+    # the sweep's inputs in cell order (neighbours close in memory), in scratch
+    sc, body, static, key = _in_cell_order(cols, ids, small, is_static, keys, order, store)
+    fwd = forward_offsets(dims, take_ints(store, 13))
+    return _sweep_cells(sc, body, static, key, first, cells, fwd, pairs, k)
+
+
+@njit(cache=True)
+def _in_cell_order(cols, ids, small, is_static, keys, order, store):
+    """(cols rows, body, is_static, key) of the small rows taken in `order`."""
+    m = len(order)
+    sc, body = take_rows(store, m, COLS), take_ints(store, m)
+    static, key = take_bools(store, m), take_ints(store, m)
+    for s in range(m):
+        r = small[order[s]]
+        sc[s] = cols[r]
+        body[s] = ids[r]
+        static[s] = is_static[body[s]]
+        key[s] = keys[order[s]]
+    return sc, body, static, key
 
 
 @njit(cache=True)
@@ -425,16 +456,14 @@ def _plane_gaps(kind, dims, pos, quat, p, bodies, mode, gaps):
 
 
 @njit(cache=True)
-def _plane_pairs(kind, dims, is_static, pos, quat, margin, pairs, k):
-    """(plane, body) for each dynamic body whose lowest point lies less than
-    `margin` above the plane n·x = offset (solid below)."""
-    planes = np.flatnonzero(kind == PLANE)
-    bodies = np.flatnonzero(~is_static & (kind != PLANE))
+def _plane_pairs(kind, dims, pos, quat, margin, planes, bodies, gaps, pairs, k):
+    """(plane, body) for each dynamic body (`bodies`) whose lowest point lies
+    less than `margin` above a plane n·x = offset (solid below); gaps:
+    scratch of len(bodies)."""
     mode = 1 if (len(planes) == 1 or len(bodies) == 1) else 2
     if len(planes) == 1 and len(bodies) == 1:
         mode = 0
     pairs = reserve(pairs, k + len(planes) * len(bodies))
-    gaps = np.empty(len(bodies))
     for p in planes:
         _plane_gaps(kind, dims, pos, quat, p, bodies, mode, gaps)
         for r in range(len(bodies)):
@@ -463,26 +492,75 @@ def finite_poses(kind, pos, quat):
 def candidate_pairs(kind, dims, is_static, reach, pos, quat, margin):
     """(k, 2) int64 pairs (a, b) in Manifold order, sorted by pair id; the
     poses must be finite (finite_poses)."""
-    solid_owned = np.flatnonzero(kind != PLANE)
-    solid = borrow(solid_owned)                  # borrowed (physics_core/borrowed.py)
-    pairs = np.empty((max(16, 4 * len(kind)), 2), np.int64)
-    k = 0
-    if len(solid) >= 2:
-        classes = _classes(kind, dims, reach, pos, quat, margin, solid)
-        cols, small, large, cell = borrow(classes)
-        if len(small) >= 2:
-            pairs, k = _grid_pairs(cols, solid, small, cell, is_static, pairs, k)
-        if len(large):
-            pairs, k = _large_pairs(cols, solid, large, small, cell, is_static, pairs, k)
-        keep_alive(classes)
-    pairs, k = _plane_pairs(kind, dims, is_static, pos, quat, margin, pairs, k)
-    keep_alive(solid_owned)
-    return sort_pairs(pairs, k, len(kind))
+    bodies = np.flatnonzero(~is_static & (kind != PLANE))
+    found = find_pairs(kind, dims, is_static, reach, pos, quat, margin,
+                       np.flatnonzero(kind != PLANE), np.flatnonzero(kind == PLANE), bodies,
+                       np.empty(len(bodies)), np.empty((max(16, 4 * len(kind)), 2), np.int64),
+                       empty_store())
+    return sort_pairs(found[0], found[1], len(kind))
 
 
 @njit(cache=True)
-def _classes(kind, dims, reach, pos, quat, margin, solid):
+def find_pairs(kind, dims, is_static, reach, pos, quat, margin, solid, planes, bodies, gaps, pairs,
+               store):
+    """(pairs, k): the unsorted candidate pairs in `pairs` (grown if short, a
+    new array then); solid, planes, bodies: the solid bodies, the planes,
+    the dynamic solid bodies; gaps: scratch of len(bodies); store: the
+    scratch of the tables made on the way (scratch.py; empty_store() makes
+    them new arrays)."""
+    k = 0
+    if len(solid) >= 2:
+        classes = _classes(kind, dims, reach, pos, quat, margin, solid, store)
+        cols, small, large, cell = borrow(classes)
+        if len(small) >= 2:
+            pairs, k = _grid_pairs(cols, solid, small, cell, is_static, pairs, k, store)
+        if len(large):
+            pairs, k = _large_pairs(cols, solid, large, small, cell, is_static, pairs, k)
+        keep_alive(classes)
+    return _plane_pairs(kind, dims, pos, quat, margin, planes, bodies, gaps, pairs, k)
+
+
+@njit(cache=True, inline="always")
+def scratch_pairs(kind, dims, is_static, reach, pos, quat, margin, store):
+    """candidate_pairs for the step loop, in a view of the scratch store
+    (scratch.py) valid until the next substep's detection."""
+    n = len(kind)
+    solid, planes, bodies = _body_lists(kind, is_static, store)
+    counts = store[1]
+    room = take_int_rows(store, max(16, 4 * n, counts[PAIR_GUESS]), 2)
+    found = find_pairs(kind, dims, is_static, reach, pos, quat, margin, solid, planes, bodies,
+                       take(store, len(bodies)), room, store)
+    pairs, k = borrow(found)
+    counts[PAIR_GUESS] = k + k // 8     # a pair list that grew: room for as many next time
+    start = take_ints(store, n + 2)
+    start[:] = 0
+    out = sort_into(pairs, k, start, take_int_rows(store, k, 2))
+    keep_alive(found)
+    return out
+
+
+@njit(cache=True, inline="always")
+def _body_lists(kind, is_static, store):
+    """(solid, planes, dynamic solid) body indices, ascending, in scratch views."""
+    n = len(kind)
+    solid, planes, bodies = take_ints(store, n), take_ints(store, n), take_ints(store, n)
+    s = p = d = 0
+    for i in range(n):
+        if kind[i] == PLANE:
+            planes[p] = i
+            p += 1
+        else:
+            solid[s] = i
+            s += 1
+            if not is_static[i]:
+                bodies[d] = i
+                d += 1
+    return solid[:s], planes[:p], bodies[:d]
+
+
+@njit(cache=True)
+def _classes(kind, dims, reach, pos, quat, margin, solid, store):
     """(solid table, small rows, large rows, cell edge) of the solid bodies."""
-    cols = solid_table(kind, dims, reach, pos, quat, margin, solid)
-    small, large, cell = _classify(cols)
+    cols = solid_table(kind, dims, reach, pos, quat, margin, solid, take_rows(store, len(solid), COLS))
+    small, large, cell = _classify(cols, store)
     return cols, small, large, cell

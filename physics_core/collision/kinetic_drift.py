@@ -16,11 +16,11 @@ balance friction's torque about the centre move the body in full, and
 halving only one of the two would turn a sliding box a little every substep.
 Bounces and bodies the ccd stage moved back keep their own motion rule.
 """
-import numpy as np
 from numba import njit
 
 from .contact_layout import BODY_A, BODY_B, DIR, INV_MASS_A, INV_MASS_B, LAM, MU, SLIDING
 from .manifold_friction import COUNT, FIRST, IMA, IMB, L, M_LAM, M_MU_K, M_SLIDING
+from .scratch import take_rows
 
 # how close to the bound a solved impulse counts as on it: the cap sets it to
 # the bound times |u| / sqrt(|u|² + 1e-300), equal to rounding
@@ -68,16 +68,17 @@ def _anchor(R, I, M, MI, k, out):
 
 
 @njit(cache=True)
-def kinetic_velocity_change(R, I, M, MI, n):
+def kinetic_velocity_change(R, I, M, MI, n, store):
     """(n, 3) each body's velocity change from friction at its kinetic bound
     (the solve's final impulses, before the collision pass's are added);
-    (0, 3) when no contact slides."""
+    (0, 3) when no contact slides. In the substep's scratch (scratch.py)."""
     sliding = False
     for k in range(len(MI)):
         sliding |= MI[k, M_SLIDING] != 0
     if not sliding:
-        return np.zeros((0, 3))
-    out = np.zeros((n, 3))
+        return take_rows(store, 0, 3)
+    out = take_rows(store, n, 3)
+    out[:] = 0.0
     for k in range(len(MI)):
         if MI[k, COUNT] < 2:
             _row(R, I, MI[k, FIRST], out)

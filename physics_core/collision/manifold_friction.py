@@ -26,13 +26,13 @@ anchored when MI[m, COUNT] ≥ 2.
 """
 import math
 
-import numpy as np
 from numba import njit
 
 from .contact_build import start_separation, touch_shift, world_inverse_inertia
 from .kinetic_bound import kinetic_bound
 from .contact_layout import (BODY_A, BODY_B, DEPTH, DIR, INV_MASS_A, INV_MASS_B, LAM, MU_K, MU_S,
                              SLIDING, U0)
+from .scratch import take, take_int_rows, take_rows
 
 # float columns: per row r (3): linear direction L, angular parts for a and b,
 # I_w⁻¹ times them; then the bodies' inverse masses, W⁻¹ (3×3), μ_s, μ_k, r̄, λ (3)
@@ -50,12 +50,14 @@ def _starts_run(I, c):
 
 
 @njit(cache=True)
-def manifold_ranges(I):
-    """MI with the first row and row count of every run of rows of one pair."""
+def manifold_ranges(I, store):
+    """MI with the first row and row count of every run of rows of one pair
+    (in the substep's scratch, scratch.py)."""
     m = 0
     for c in range(len(I)):
         m += _starts_run(I, c)
-    MI = np.zeros((m, MICOL), np.int64)
+    MI = take_int_rows(store, m, MICOL)
+    MI[:] = 0
     k = -1
     for c in range(len(I)):
         if _starts_run(I, c):
@@ -138,14 +140,15 @@ def _invert(M, k, w):
 
 
 @njit(cache=True)
-def anchor_rows(R, I, point, pos, quat, inv_inertia, toi, h):
+def anchor_rows(R, I, point, pos, quat, inv_inertia, toi, h, store):
     """(M, MI) of the contact rows: every manifold's range, and the anchor
     rows of those with two or more points (the rows' own friction zeroed);
     toi, h: the bodies' times of impact and the substep (the touch shift)."""
-    MI = manifold_ranges(I)
-    M = np.zeros((len(MI), MCOL))
-    iw_a, iw_b, w = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
-    n = np.empty(3)
+    MI = manifold_ranges(I, store)
+    M = take_rows(store, len(MI), MCOL)
+    M[:] = 0.0
+    iw_a, iw_b, w = take_rows(store, 3, 3), take_rows(store, 3, 3), take_rows(store, 3, 3)
+    n = take(store, 3)
     for k in range(len(MI)):
         first, count = MI[k, FIRST], MI[k, COUNT]
         if count < 2:

@@ -21,12 +21,13 @@ from numba import njit
 
 from ..quaternion import integrate_one, row4
 from .contact_layout import (ARM_A, ARM_B, BODY_A, BODY_B, DEPTH, DIR, INV_MASS_A, INV_MASS_B)
+from .scratch import take, take_rows
 
 
 @njit(cache=True)
-def bounce_remainders(n, I, target, tau):
-    """(n,) per body the largest 1 − τ of its bouncing contacts (-1: none)."""
-    after = np.full(n, -1.0)
+def bounce_remainders(I, target, tau, after):
+    """after (n,): per body the largest 1 − τ of its bouncing contacts (-1: none)."""
+    after[:] = -1.0
     for c in range(len(target)):
         if target[c] > 0.0:
             for body in (I[c, BODY_A], I[c, BODY_B]):
@@ -35,7 +36,7 @@ def bounce_remainders(n, I, target, tau):
 
 
 @njit(cache=True)
-def velocity_changes(vel, omega, vel0, omega0, I, target, tau, toi, slide):
+def velocity_changes(vel, omega, vel0, omega0, I, target, tau, toi, slide, store):
     """(n, 6) the rate each body still moves at over h beyond the integrator's
     motion: what the solve changed, over the part of the substep it acts on;
     a body moved back to its time of impact toi (≥ 0) moves with its solved
@@ -44,9 +45,9 @@ def velocity_changes(vel, omega, vel0, omega0, I, target, tau, toi, slide):
     constant force over the substep, which moves the body by half of it
     (kinetic_drift.py)."""
     n = len(vel)
-    after = bounce_remainders(n, I, target, tau)
+    after = bounce_remainders(I, target, tau, take(store, n))
     half = len(slide) == n
-    dV = np.empty((n, 6))
+    dV = take_rows(store, n, 6)
     for i in range(n):
         rest = 1.0 - toi[i]
         scale = after[i] if after[i] >= 0.0 else 1.0
@@ -129,14 +130,15 @@ def move_bodies(pos, quat, dV, X, h):
 
 @njit(cache=True)
 def correct(R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, slide, h, slop, rate,
-            max_speed, iterations):
-    """The whole correct stage (see the module docstring)."""
-    dV = velocity_changes(vel, omega, vel0, omega0, I, target, tau, toi, slide)
+            max_speed, iterations, store):
+    """The whole correct stage (see the module docstring); store: the
+    substep's scratch (scratch.py)."""
+    dV = velocity_changes(vel, omega, vel0, omega0, I, target, tau, toi, slide, store)
     k = len(R)
-    sep = np.empty(k)
+    sep = take(store, k)
     separations(R, I, dV, h, sep)
-    push = np.empty(k)
-    X = np.zeros((0, 3))
+    push = take(store, k)
+    X = take_rows(store, 0, 3)
     if iterations > 0 and rate > 0.0 and max_speed > 0.0 and push_targets(sep, slop, rate,
                                                                             max_speed, h, push):
         X = solve_pseudo(R, I, push, iterations, len(pos))

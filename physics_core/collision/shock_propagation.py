@@ -45,6 +45,7 @@ from ..quaternion import rotate_inverse_one, row4
 from .contact_build import effective_masses
 from .contact_layout import ARM_A, ARM_B, BODY_A, BODY_B, INV_MASS_A, INV_MASS_B, LAM, TURN_A, TURN_B
 from .manifold_friction import COUNT, FIRST, IMA, IMB, M_LAM, TA, TB, _invert
+from .scratch import take, take_bools, take_int_rows, take_ints, take_rows
 from .sequential_impulses import update_manifold
 
 UNREACHED = np.int64(1) << 40
@@ -61,19 +62,23 @@ STALL = 0.9
 # 300-box pyramid that were thrown off gained 2.5 % (median), 9 % (90th
 # percentile), 69 % at most, per substep
 GAIN = 1e-4
+SMALL_SORT = 32         # up to this many manifolds, _stable_order sorts by insertion
 
 
 @njit(cache=True)
-def _neighbours(I, n):
-    """CSR adjacency of the contact graph: (start (n + 1), other body per entry)."""
-    start = np.zeros(n + 1, np.int64)
+def _neighbours(I, n, store):
+    """CSR adjacency of the contact graph: (start (n + 1), other body per
+    entry), in the substep's scratch (scratch.py)."""
+    start = take_ints(store, n + 1)
+    start[:] = 0
     for c in range(len(I)):
         start[I[c, BODY_A] + 1] += 1
         start[I[c, BODY_B] + 1] += 1
     for i in range(n):
         start[i + 1] += start[i]
-    fill = start[:-1].copy()
-    other = np.empty(2 * len(I), np.int64)
+    fill = take_ints(store, n)
+    fill[:] = start[:-1]
+    other = take_ints(store, 2 * len(I))
     for c in range(len(I)):
         a, b = I[c, BODY_A], I[c, BODY_B]
         other[fill[a]] = b
@@ -84,11 +89,12 @@ def _neighbours(I, n):
 
 
 @njit(cache=True)
-def support_layers(R, I, n):
+def support_layers(R, I, n, store):
     """(n,) breadth-first layer of every body from the immovable ones (a row
     side with zero inverse mass) over the contacts; UNREACHED elsewhere."""
-    layer = np.full(n, UNREACHED)
-    queue = np.empty(n, np.int64)
+    layer = take_ints(store, n)
+    layer[:] = UNREACHED
+    queue = take_ints(store, n)
     tail = 0
     for c in range(len(I)):
         for side, body in ((INV_MASS_A, I[c, BODY_A]), (INV_MASS_B, I[c, BODY_B])):
@@ -96,7 +102,7 @@ def support_layers(R, I, n):
                 layer[body] = 0
                 queue[tail] = body
                 tail += 1
-    start, other = _neighbours(I, n)
+    start, other = _neighbours(I, n, store)
     head = 0
     while head < tail:
         i = queue[head]
@@ -130,15 +136,15 @@ def _freeze_anchor(M, k, side, w):
 
 
 @njit(cache=True)
-def _one_sided(R, I, M, MI, layer, order):
+def _one_sided(R, I, M, MI, layer, order, store):
     """Compact copies (R1, I1, M1, MI1) of the manifolds of `order`, in that
     order, with the lower layer's side of every row immovable."""
     rows = 0
     for k in order:
         rows += MI[k, COUNT]
-    R1, I1 = np.empty((rows, R.shape[1])), np.empty((rows, I.shape[1]), np.int64)
-    M1, MI1 = np.empty((len(order), M.shape[1])), np.empty((len(order), MI.shape[1]), np.int64)
-    w = np.empty((3, 3))
+    R1, I1 = take_rows(store, rows, R.shape[1]), take_int_rows(store, rows, I.shape[1])
+    M1, MI1 = take_rows(store, len(order), M.shape[1]), take_int_rows(store, len(order), MI.shape[1])
+    w = take_rows(store, 3, 3)
     r = 0
     for m in range(len(order)):
         k = order[m]
@@ -156,21 +162,40 @@ def _one_sided(R, I, M, MI, layer, order):
 
 
 @njit(cache=True)
-def _upward_order(I, MI, layer):
+def _upward_order(I, MI, layer, store):
     """(order, top): the manifolds between two layers (touching something
     immovable), by (higher layer, lower layer), key order within (a stable
     sort: deterministic), and the higher layer of each."""
-    rank = np.empty(len(MI), np.int64)
-    top = np.empty(len(MI), np.int64)
+    rank = take_ints(store, len(MI))
+    top = take_ints(store, len(MI))
     for k in range(len(MI)):
         la, lb = layer[I[MI[k, FIRST], BODY_A]], layer[I[MI[k, FIRST], BODY_B]]
         top[k], lo = max(la, lb), min(la, lb)
         rank[k] = UNREACHED if (lo == UNREACHED or lo == top[k]) else top[k] * (len(layer) + 1) + lo
-    order = np.argsort(rank, kind="mergesort")
+    order = _stable_order(rank, store)
     m = 0
     while m < len(order) and rank[order[m]] != UNREACHED:
         m += 1
-    return order[:m], top[order[:m]]
+    tops = take_ints(store, m)
+    for s in range(m):
+        tops[s] = top[order[s]]
+    return order[:m], tops
+
+
+@njit(cache=True)
+def _stable_order(rank, store):
+    """np.argsort(rank, kind="mergesort"): a stable order is unique, so a few
+    ranks are sorted by insertion in scratch instead (no allocation)."""
+    if len(rank) > SMALL_SORT:
+        return np.argsort(rank, kind="mergesort")
+    order = take_ints(store, len(rank))
+    for s in range(len(rank)):
+        t = s
+        while t > 0 and rank[order[t - 1]] > rank[s]:
+            order[t] = order[t - 1]
+            t -= 1
+        order[t] = s
+    return order
 
 
 @njit(cache=True)
@@ -197,7 +222,7 @@ def _point_change(vel, omega, i, before, o, lever):
     return dv + dw * lever
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _update(R1, I1, M1, MI1, m, vel, omega, lever, tolerance, moved, clock, before):
     """One update of manifold m; returns the largest change of a contact-point
     velocity of its bodies it made (m/s). A body whose change reaches
@@ -233,7 +258,7 @@ def _sweep(one_sided, start, stop, vel, omega, levers, tolerance, moved, clock, 
 
 
 @njit(cache=True)
-def _settle(one_sided, start, stop, vel, omega, passes, tolerance, moved, clock):
+def _settle(one_sided, start, stop, vel, omega, passes, tolerance, moved, clock, store):
     """Sweeps over one layer's manifolds start..stop (the lower layer
     immovable), up to `passes`, until a sweep changes no contact-point
     velocity by more than `tolerance` (m/s; ≤ 0: all passes): the layer's
@@ -246,10 +271,10 @@ def _settle(one_sided, start, stop, vel, omega, passes, tolerance, moved, clock)
     long settled. A layer also stops when its change has stalled (STALL).
     Returns the sweep count after these sweeps."""
     R1, I1, M1, MI1 = one_sided
-    levers = np.empty(stop - start)
+    levers = take(store, stop - start)
     for m in range(start, stop):
         levers[m - start] = _lever(R1, MI1[m, FIRST], MI1[m, COUNT])
-    before = np.empty(12)
+    before = take(store, 12)
     last = earlier = math.inf
     for p in range(passes):
         clock += 1
@@ -295,10 +320,10 @@ def _kinetic_energy(bodies, vel, omega, masses):
 
 
 @njit(cache=True)
-def _upper_bodies(I1, MI1, layer, g, e, mark):
+def _upper_bodies(I1, MI1, layer, g, e, mark, store):
     """The bodies of the higher layer of manifolds g..e, each once (mark: (n,)
     False on entry and on return)."""
-    out = np.empty(e - g, np.int64)
+    out = take_ints(store, e - g)
     k = 0
     for m in range(g, e):
         a, b = I1[MI1[m, FIRST], BODY_A], I1[MI1[m, FIRST], BODY_B]
@@ -314,20 +339,20 @@ def _upper_bodies(I1, MI1, layer, g, e, mark):
 
 @njit(cache=True)
 def _settle_guarded(one_sided, g, e, vel, omega, passes, tolerance, moved, clock, layer, masses,
-                    kept, mark):
+                    kept, mark, store):
     """_settle for one layer, undone if it gave the layer's bodies kinetic
     energy: resting on what holds it removes approach and slip, so a layer
     that gains energy was made to follow a support it cannot follow (a box
     on two boxes moving apart, a box turning under another): its velocities
     and impulses are put back, and kept[g:e] is False. Returns the clock."""
     R1, I1, M1, MI1 = one_sided
-    upper = _upper_bodies(I1, MI1, layer, g, e, mark)
-    saved = np.empty((len(upper), 6))
+    upper = _upper_bodies(I1, MI1, layer, g, e, mark, store)
+    saved = take_rows(store, len(upper), 6)
     for k in range(len(upper)):
         for j in range(3):
             saved[k, j], saved[k, 3 + j] = vel[upper[k], j], omega[upper[k], j]
     before = _kinetic_energy(upper, vel, omega, masses)
-    clock = _settle(one_sided, g, e, vel, omega, passes, tolerance, moved, clock)
+    clock = _settle(one_sided, g, e, vel, omega, passes, tolerance, moved, clock, store)
     if _kinetic_energy(upper, vel, omega, masses) > before * (1.0 + GAIN) + 1e-300:
         for k in range(len(upper)):
             for j in range(3):
@@ -337,18 +362,21 @@ def _settle_guarded(one_sided, g, e, vel, omega, passes, tolerance, moved, clock
 
 
 @njit(cache=True)
-def shock_sweep(R, I, M, MI, vel, omega, n, passes, tolerance, masses):
+def shock_sweep(R, I, M, MI, vel, omega, n, passes, tolerance, masses, store):
     """The ordered one-sided sweep (module docstring), layer after layer from
     the ground up, each settled in turn (`_settle_guarded`); the rows' and
     anchors' λ updated in place. Returns the number of manifolds visited."""
     if len(MI) == 0:
         return 0
-    layer = support_layers(R, I, n)
-    order, top = _upward_order(I, MI, layer)
-    one_sided = _one_sided(R, I, M, MI, layer, order)
-    moved = np.full(n, -1, np.int64)
-    kept = np.ones(len(order), np.bool_)
-    mark = np.zeros(n, np.bool_)
+    layer = support_layers(R, I, n, store)
+    order, top = _upward_order(I, MI, layer, store)
+    one_sided = _one_sided(R, I, M, MI, layer, order, store)
+    moved = take_ints(store, n)
+    moved[:] = -1
+    kept = take_bools(store, len(order))
+    kept[:] = True
+    mark = take_bools(store, n)
+    mark[:] = False
     clock = 0
     g = 0
     while g < len(order):
@@ -356,7 +384,7 @@ def shock_sweep(R, I, M, MI, vel, omega, n, passes, tolerance, masses):
         while e < len(order) and top[e] == top[g]:
             e += 1
         clock = _settle_guarded(one_sided, g, e, vel, omega, passes, tolerance, moved, clock,
-                                layer, masses, kept, mark)
+                                layer, masses, kept, mark, store)
         g = e
     _scatter_impulses(R, M, MI, order, one_sided[0], one_sided[2], one_sided[3], kept)
     return len(order)

@@ -61,7 +61,7 @@ def turn_angle(q0, q1):
     return 2.0 * math.acos(min(c, 1.0))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def sweep(kind, reach, i, p0, q0, pos, quat):
     """Bound on how far any point of body i moves over the substep."""
     d = math.sqrt((pos[i, 0] - p0[i, 0]) ** 2 + (pos[i, 1] - p0[i, 1]) ** 2
@@ -74,7 +74,14 @@ def sweep(kind, reach, i, p0, q0, pos, quat):
 @njit(cache=True)
 def fast_bodies(kind, dims, reach, moving, p0, q0, pos, quat, threshold):
     """(n,) bool: moving bodies whose sweep exceeds threshold × smallest half size."""
-    fast = np.zeros(len(pos), np.bool_)
+    return mark_fast(kind, dims, reach, moving, p0, q0, pos, quat, threshold,
+                     np.empty(len(pos), np.bool_))
+
+
+@njit(cache=True)
+def mark_fast(kind, dims, reach, moving, p0, q0, pos, quat, threshold, fast):
+    """fast_bodies into `fast` (n,)."""
+    fast[:] = False
     for i in range(len(pos)):
         if moving[i] and kind[i] != PLANE:
             fast[i] = sweep(kind, reach, i, p0, q0, pos, quat) > threshold * smallest_half_size(kind, dims, i)
@@ -295,10 +302,11 @@ def rewind(i, t, p0, q0, pos, quat, omega):
 
 @njit(cache=True)
 def rewind_fast_bodies(kind, dims, reach, is_static, moving, p0, q0, pos, quat, omega, threshold,
-                       margin, iterations, tolerance, toi):
+                       margin, iterations, tolerance, toi, fast):
     """The ccd stage: toi[i] = time of impact (fraction of the substep) of each
-    body moved back, -1 for the others. Returns how many were moved back."""
-    fast = fast_bodies(kind, dims, reach, moving, p0, q0, pos, quat, threshold)
+    body moved back, -1 for the others; fast: (n,) bool scratch. Returns how
+    many were moved back."""
+    mark_fast(kind, dims, reach, moving, p0, q0, pos, quat, threshold, fast)
     return rewind_bodies(kind, dims, reach, is_static, fast, p0, q0, pos, quat, omega, threshold,
                          margin, iterations, tolerance, toi)
 

@@ -68,21 +68,36 @@ def warm_load(R, I, key, cache_keys, cache_values, fraction, static_speed, vel0,
 
 @njit(cache=True)
 def warm_store(cache_keys, cache_values, key, R, friction, slip):
-    """Keep this substep's impulses, friction vectors and slip speeds by key."""
-    values = np.empty((len(key), WARM_COLS))
+    """Keep this substep's impulses, friction vectors and slip speeds by key,
+    in views of the cache's buffers (item 1 of each list, grown by doubling):
+    the old entries were read by warm_load already, so they are overwritten."""
+    keys, values = _buffers(cache_keys, cache_values, len(key))
     for c in range(len(key)):
+        keys[c] = key[c]
         values[c, WARM_NORMAL] = R[c, LAM]
         for i in range(3):
             values[c, WARM_FRICTION + i] = friction[c, i]
         values[c, WARM_SLIP] = slip[c]
-    cache_keys[0] = key.copy()
-    cache_values[0] = values
+    cache_keys[0] = keys[:len(key)]
+    cache_values[0] = values[:len(key)]
+
+
+@njit(cache=True)
+def _buffers(cache_keys, cache_values, k):
+    """The cache's buffers (list item 1), replaced by ones of at least 2× the
+    rows when they hold fewer than k."""
+    if len(cache_keys[1]) < k:
+        size = max(k, 2 * len(cache_keys[1]))
+        cache_keys[1] = np.empty(size, np.int64)
+        cache_values[1] = np.empty((size, WARM_COLS))
+    return cache_keys[1], cache_values[1]
 
 
 @njit(cache=True)
 def warm_clear(cache_keys, cache_values):
-    cache_keys[0] = np.zeros(0, np.int64)
-    cache_values[0] = np.zeros((0, WARM_COLS))
+    keys, values = _buffers(cache_keys, cache_values, 0)
+    cache_keys[0] = keys[:0]
+    cache_values[0] = values[:0]
 
 
 @njit(cache=True)
