@@ -18,7 +18,7 @@ from numba import njit
 from ..quaternion import row4, to_matrix_one
 from .contact_layout import (ARM_A, ARM_B, BIAS, BODY_A, BODY_B, DEPTH, DIR, E, G_TN, INV_MASS_A,
                              INV_MASS_B, K_A, K_B, LAM, MASS_N, MU, MU_K, MU_S, SLIDING, TURN_A,
-                             TURN_B, U0, W_TN, W_TT, W_TT_INV)
+                             TURN_B, U0, W_TT, W_TT_INV)
 from .scratch import take_rows
 
 RESTITUTION_RULES = {"effective_mass": 0, "mean": 1, "min": 2, "max": 3}
@@ -76,7 +76,7 @@ def coupling(R, c, r, s):
 
 @njit(cache=True, inline="always")
 def effective_masses(R, c):
-    """1/W_nn, the tangent block and its inverse, W_tn and W_tt⁻¹ W_tn."""
+    """1/W_nn, the tangent block and its inverse, and W_tt⁻¹ W_tn."""
     k_a = R[c, INV_MASS_A]
     k_b = R[c, INV_MASS_B]
     for i in range(3):
@@ -92,7 +92,6 @@ def effective_masses(R, c):
     i11, i12, i21, i22 = w22 * inv_det, -w12 * inv_det, -w21 * inv_det, w11 * inv_det
     R[c, W_TT_INV], R[c, W_TT_INV + 1], R[c, W_TT_INV + 2], R[c, W_TT_INV + 3] = i11, i12, i21, i22
     t1n, t2n = coupling(R, c, 1, 0), coupling(R, c, 2, 0)
-    R[c, W_TN], R[c, W_TN + 1] = t1n, t2n
     R[c, G_TN], R[c, G_TN + 1] = i11 * t1n + i12 * t2n, i21 * t1n + i22 * t2n
 
 
