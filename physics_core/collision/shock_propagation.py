@@ -27,9 +27,14 @@ its own supports instead of every body of a layer converging as one
 group (together the two cut a formed 1,000-sphere pile's sweep from 1.9×
 to 0.75× the cost of the rest of its step, with the stack and mass-ratio
 results unchanged). Bodies that touch nothing immovable (free-flying
-groups) are not visited, so their momentum is kept exactly. This removes the reaction of an upper body on the lower
-within this sweep only: the warm-started sweeps before it carry the
-loads down.
+groups) are not visited, so their momentum is kept exactly. This removes
+the reaction of an upper body on the lower within this sweep only: the
+warm-started sweeps before it carry the loads down.
+
+A layer stops sweeping once its change stalls (STALL), and a layer whose
+settle raised its bodies' kinetic energy is undone (GAIN,
+_settle_guarded): a body on two supports that move apart cannot follow
+both, and making it try threw the top boxes off a tall pyramid.
 
 On a converged solve the sweep changes nothing (no contact approaches or
 slips); it only removes what the sweeps left. The warm cache keeps the
