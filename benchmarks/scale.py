@@ -3,9 +3,10 @@
 - box pyramid (pyramid.py), measured here, each engine and size in a fresh
   process (measure.py): steps/s, body-steps/s, peak memory, and where this
   engine's step time goes (its stage profile);
+- box piles (box_pile.py), 1 to 1,000 cubes, measured as the pyramid is;
 - sphere piles, from benchmarks/pile_compare.py.
 
-Writes `scale.md`, `scale.json` and `scale_pyramid.png`.
+Writes `scale.md`, `scale.json`, `scale_pyramid.png` and `scale_box_piles.png`.
 """
 import importlib
 import importlib.util
@@ -19,6 +20,10 @@ from .progress import Progress
 from .results_io import machine, write_json, write_text
 
 SIZES = {True: (1, 10, 100, 1000), False: (1, 10, 100, 1000, 10000)}
+BOX_PILE_SIZES = (1, 10, 100, 1000)
+# a box pile is timed over its first second, as the sphere piles are: the
+# fall, the impacts and the pile forming (its first 0.1 s is free fall)
+BOX_PILE_STEPS = {True: 60, False: 240}
 STEP_BUDGET = 20000          # body-steps per measurement: fewer steps for bigger scenes
 
 
@@ -36,12 +41,15 @@ def run(quick=False, out=None):
         data["skipped"] = why
     else:
         data["pyramid"] = pyramid_study(quick)
+        data["box_piles"] = box_pile_study(quick)
         data["piles"] = pile_study(quick)
     if out:
         write_json(out, "scale.json", data)
         write_text(out, "scale.md", report(data))
         if data.get("pyramid"):
             plot_scale(data["pyramid"], "Box pyramid", f"{out}/scale_pyramid.png")
+        if data.get("box_piles"):
+            plot_scale(data["box_piles"], "Box piles", f"{out}/scale_box_piles.png")
     return data
 
 
@@ -50,20 +58,31 @@ def installed(engine):
 
 
 def pyramid_study(quick):
-    sizes = SIZES[quick]
+    return fresh_process_study("pyramid", "benchmarks.pyramid", SIZES[quick],
+                               lambda n: steps_for(n, quick))
+
+
+def box_pile_study(quick):
+    return fresh_process_study("box pile", "benchmarks.box_pile", BOX_PILE_SIZES,
+                               lambda n: BOX_PILE_STEPS[quick])
+
+
+def fresh_process_study(label, module, sizes, steps):
+    """Every engine at every size, each in a fresh process (measure.py), on
+    the scene `module`.boxes(n) makes, for steps(n) steps."""
     prog = Progress("scale", len(sizes) * len(engines.ENGINES))
     rows = []
     for n in sizes:
         for engine in engines.ENGINES:
             if not installed(engine):
                 rows.append({"engine": engine, "bodies": n, "error": "not installed"})
-                prog.step(f"pyramid {n} boxes, {engine}: not installed "
+                prog.step(f"{label} {n} boxes, {engine}: not installed "
                           "(`make compare-extras` installs PyBullet and MuJoCo)")
                 continue
-            r = measure("benchmarks.pyramid", "boxes", n, engine, steps_for(n, quick))
+            r = measure(module, "boxes", n, engine, steps(n))
             r.setdefault("bodies", n)
             rows.append(r)
-            prog.step(f"pyramid {n} boxes, {engine}: "
+            prog.step(f"{label} {n} boxes, {engine}: "
                       + (f"{r['steps_per_second']:.3g} steps/s, peak {r['peak_rss_mb']:.0f} MB"
                          if "error" not in r else f"failed: {r['error']}"))
     return rows
@@ -192,6 +211,15 @@ def report(data):
               "![pyramid](scale_pyramid.png)\n", pyramid_table(data["pyramid"]),
               "\n### Where this engine's step time goes (box pyramid)\n",
               stage_table(data["pyramid"])]
+    if data.get("box_piles"):
+        about = (_box_pile_doc().split("\n\n", 1) + [""])[1]
+        parts += ["\n## Box piles (benchmarks/box_pile.py)\n",
+                  " ".join(about.split()) + f" Timed over the first {BOX_PILE_STEPS[data['quick']]} "
+                  "steps (the fall, the impacts and the pile forming), in wall time of a fresh "
+                  "process per engine and size, as the pyramid is.\n",
+                  "![box piles](scale_box_piles.png)\n", pyramid_table(data["box_piles"]),
+                  "\n### Where this engine's step time goes (box piles)\n",
+                  stage_table(data["box_piles"])]
     piles = data.get("piles") or {}
     parts.append("\n## Sphere piles (benchmarks/pile_compare.py)\n")
     if "skipped" in piles:
@@ -205,6 +233,11 @@ def report(data):
                               [[n, _ratio_text(x.get("pybullet")), _ratio_text(x.get("mujoco"))]
                                for n, x in pile_ratios(piles["rows"])], align="rrr"))
     return "\n".join(parts)
+
+
+def _box_pile_doc():
+    from . import box_pile
+    return box_pile.__doc__ or ""
 
 
 def generic_table(rows):
