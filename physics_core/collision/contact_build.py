@@ -19,20 +19,38 @@ from ..quaternion import row4, to_matrix_one
 from .contact_layout import (ARM_A, ARM_B, BIAS, BODY_A, BODY_B, DEPTH, DIR, E, G_TN, INV_MASS_A,
                              INV_MASS_B, K_A, K_B, LAM, MASS_N, MU, MU_K, MU_S, SLIDING, TURN_A,
                              TURN_B, U0, W_TT, W_TT_INV)
-from .scratch import take_rows
+from .scratch import take_bools, take_rows
 
 RESTITUTION_RULES = {"effective_mass": 0, "mean": 1, "min": 2, "max": 3}
 _TINY = 1e-30
 
 
 @njit(cache=True, inline="always")
-def world_inverse_inertia(q, inv_inertia, out):
-    """out (3, 3) = I_w⁻¹ = R diag(I⁻¹) Rᵀ (COURSE.md 3)."""
+def world_inverse_inertia(q, inv_inertia, out, row):
+    """out[row] (9,) = I_w⁻¹ = R diag(I⁻¹) Rᵀ (COURSE.md 3), row-major."""
     R = to_matrix_one(q)
     for i in range(3):
         for j in range(3):
-            out[i, j] = (R[i][0] * inv_inertia[0] * R[j][0] + R[i][1] * inv_inertia[1] * R[j][1]
-                         + R[i][2] * inv_inertia[2] * R[j][2])
+            out[row, 3 * i + j] = (R[i][0] * inv_inertia[0] * R[j][0]
+                                   + R[i][1] * inv_inertia[1] * R[j][1]
+                                   + R[i][2] * inv_inertia[2] * R[j][2])
+
+
+@njit(cache=True)
+def inertia_table(a, b, quat, inv_inertia, store):
+    """(n, 9) I_w⁻¹ of every body in a contact (a[c] or b[c]), each computed
+    once however many contacts it has; the other rows are not set. In the
+    substep's scratch (scratch.py)."""
+    n = len(quat)
+    table, done = take_rows(store, n, 9), take_bools(store, n)
+    done[:] = False
+    for side in (a, b):
+        for c in range(len(side)):
+            i = side[c]
+            if not done[i]:
+                world_inverse_inertia(row4(quat, i), inv_inertia[i], table, i)
+                done[i] = True
+    return table
 
 
 @njit(cache=True, inline="always")
@@ -48,17 +66,18 @@ def tangent_frame(R, c, nx, ny, nz):
 
 
 @njit(cache=True)
-def lever_arms(R, c, arm, turn, rx, ry, rz, iw, first, stop):
-    """r × d_r and I_w⁻¹ (r × d_r) of one body, for the directions first..stop − 1."""
+def lever_arms(R, c, arm, turn, rx, ry, rz, iw, body, first, stop):
+    """r × d_r and I_w⁻¹ (r × d_r) of one body (iw[body]: its I_w⁻¹, row-major),
+    for the directions first..stop − 1."""
     for r in range(first, stop):
         dx, dy, dz = R[c, DIR + 3 * r], R[c, DIR + 3 * r + 1], R[c, DIR + 3 * r + 2]
         cx, cy, cz = ry * dz - rz * dy, rz * dx - rx * dz, rx * dy - ry * dx
         o = arm + 3 * r
         R[c, o], R[c, o + 1], R[c, o + 2] = cx, cy, cz
         o = turn + 3 * r
-        R[c, o] = iw[0, 0] * cx + iw[0, 1] * cy + iw[0, 2] * cz
-        R[c, o + 1] = iw[1, 0] * cx + iw[1, 1] * cy + iw[1, 2] * cz
-        R[c, o + 2] = iw[2, 0] * cx + iw[2, 1] * cy + iw[2, 2] * cz
+        R[c, o] = iw[body, 0] * cx + iw[body, 1] * cy + iw[body, 2] * cz
+        R[c, o + 1] = iw[body, 3] * cx + iw[body, 4] * cy + iw[body, 5] * cz
+        R[c, o + 2] = iw[body, 6] * cx + iw[body, 7] * cy + iw[body, 8] * cz
 
 
 @njit(cache=True)
@@ -136,7 +155,7 @@ def touch_shift(depth, s0):
 
 
 @njit(cache=True, inline="always")
-def contact_arms(R, c, i, j, point, depth, pos, vel, omega, iw_a, iw_b, h, rewound):
+def contact_arms(R, c, i, j, point, depth, pos, vel, omega, iw, h, rewound):
     """Lever arms of contact c (its frame already set) from each centre;
     returns s0, the pair's separation at the start of the substep (module
     docstring). The normal row's arms reach point[c].
@@ -158,30 +177,27 @@ def contact_arms(R, c, i, j, point, depth, pos, vel, omega, iw_a, iw_b, h, rewou
     px, py, pz = point[c, 0], point[c, 1], point[c, 2]
     rax, ray, raz = px - pos[i, 0], py - pos[i, 1], pz - pos[i, 2]
     rbx, rby, rbz = px - pos[j, 0], py - pos[j, 1], pz - pos[j, 2]
-    lever_arms(R, c, ARM_A, TURN_A, rax, ray, raz, iw_a, 0, 1)
-    lever_arms(R, c, ARM_B, TURN_B, rbx, rby, rbz, iw_b, 0, 1)
+    lever_arms(R, c, ARM_A, TURN_A, rax, ray, raz, iw, i, 0, 1)
+    lever_arms(R, c, ARM_B, TURN_B, rbx, rby, rbz, iw, j, 0, 1)
     s0 = start_separation(depth, row_velocity(R, c, 0, i, j, vel, omega), rewound, h)
     s = touch_shift(depth, s0)
     sx, sy, sz = s * R[c, DIR], s * R[c, DIR + 1], s * R[c, DIR + 2]
-    lever_arms(R, c, ARM_A, TURN_A, rax + sx, ray + sy, raz + sz, iw_a, 1, 3)
-    lever_arms(R, c, ARM_B, TURN_B, rbx - sx, rby - sy, rbz - sz, iw_b, 1, 3)
+    lever_arms(R, c, ARM_A, TURN_A, rax + sx, ray + sy, raz + sz, iw, i, 1, 3)
+    lever_arms(R, c, ARM_B, TURN_B, rbx - sx, rby - sy, rbz - sz, iw, j, 1, 3)
     return s0
 
 
 @njit(cache=True)
-def build_rows(R, I, a, b, point, normal, depth, pos, quat, vel, omega, inv_mass, inv_inertia,
-               material, mu_static, mu_kinetic, restitution, rule, h, toi, store):
-    """Fill R, I for the k contacts (a, b, point, normal, depth); store: the
-    substep's scratch (scratch.py)."""
-    iw_a, iw_b = take_rows(store, 3, 3), take_rows(store, 3, 3)
+def build_rows(R, I, a, b, point, normal, depth, pos, iw, vel, omega, inv_mass, material,
+               mu_static, mu_kinetic, restitution, rule, h, toi):
+    """Fill R, I for the k contacts (a, b, point, normal, depth); iw: the
+    bodies' I_w⁻¹ (inertia_table)."""
     for c in range(len(a)):
         i, j = a[c], b[c]
         I[c, BODY_A], I[c, BODY_B], I[c, SLIDING] = i, j, 0
         tangent_frame(R, c, normal[c, 0], normal[c, 1], normal[c, 2])
         R[c, INV_MASS_A], R[c, INV_MASS_B] = inv_mass[i], inv_mass[j]
-        world_inverse_inertia(row4(quat, i), inv_inertia[i], iw_a)
-        world_inverse_inertia(row4(quat, j), inv_inertia[j], iw_b)
-        s0 = contact_arms(R, c, i, j, point, depth[c], pos, vel, omega, iw_a, iw_b, h,
+        s0 = contact_arms(R, c, i, j, point, depth[c], pos, vel, omega, iw, h,
                           toi[i] >= 0.0 or toi[j] >= 0.0)
         effective_masses(R, c)
         for r in range(3):

@@ -11,7 +11,7 @@ import numpy as np
 from numba import njit
 
 from .bounce import add_bounces, collision_pass
-from .contact_build import build_rows
+from .contact_build import build_rows, inertia_table
 from .contact_data import (CCD_ITERATIONS, CCD_THRESHOLD, CCD_TOLERANCE, CORRECTION_RATE,
                            END_WEIGHT, ITERATIONS, MARGIN, MAX_CORRECTION_SPEED,
                            POSITION_ITERATIONS, RESTITUTION_ITERATIONS, RESTITUTION_RAMP,
@@ -100,10 +100,11 @@ def rows_stage(cm, fp, ip, contacts, pos, quat, vel, omega, inv_mass, inv_inerti
     start-of-substep velocities (a new contact's friction regime)."""
     a, b, point, normal, depth, key = contacts
     R, I = take_rows(store, len(a), NCOL), take_int_rows(store, len(a), ICOL)
-    build_rows(R, I, a, b, point, normal, depth, pos, quat, vel, omega, inv_mass, inv_inertia,
-               cm.material, cm.mu_static, cm.mu_kinetic, cm.restitution, ip[RULE], h, toi, store)
+    iw = inertia_table(a, b, quat, inv_inertia, store)
+    build_rows(R, I, a, b, point, normal, depth, pos, iw, vel, omega, inv_mass, cm.material,
+               cm.mu_static, cm.mu_kinetic, cm.restitution, ip[RULE], h, toi)
     warm_load(R, I, key, warm[0], warm[1], fp[WARM_FRACTION], fp[STATIC_SPEED], v0, w0)
-    M, MI = anchor_rows(R, I, point, pos, quat, inv_inertia, toi, h, store)
+    M, MI = anchor_rows(R, I, point, pos, iw, toi, h, store)
     return R, I, M, MI
 
 

@@ -28,7 +28,7 @@ import math
 
 from numba import njit
 
-from .contact_build import start_separation, touch_shift, world_inverse_inertia
+from .contact_build import start_separation, touch_shift
 from .kinetic_bound import kinetic_bound
 from .contact_layout import (BODY_A, BODY_B, DEPTH, DIR, INV_MASS_A, INV_MASS_B, LAM, MU_K, MU_S,
                              SLIDING, U0)
@@ -95,8 +95,9 @@ def _shift(R, I, first, count, toi, h):
 
 
 @njit(cache=True)
-def _body_parts(M, k, ang, turn, normal, rx, ry, rz, iw):
-    """Angular parts of one body for the three rows: r × t1, r × t2, n."""
+def _body_parts(M, k, ang, turn, normal, rx, ry, rz, iw, body):
+    """Angular parts of one body for the three rows: r × t1, r × t2, n
+    (iw[body]: its I_w⁻¹, row-major)."""
     for r in range(3):
         dx, dy, dz = M[k, L + 3 * r], M[k, L + 3 * r + 1], M[k, L + 3 * r + 2]
         if r == 2:
@@ -107,7 +108,7 @@ def _body_parts(M, k, ang, turn, normal, rx, ry, rz, iw):
         M[k, o], M[k, o + 1], M[k, o + 2] = cx, cy, cz
         o = turn + 3 * r
         for i in range(3):
-            M[k, o + i] = iw[i, 0] * cx + iw[i, 1] * cy + iw[i, 2] * cz
+            M[k, o + i] = iw[body, 3 * i] * cx + iw[body, 3 * i + 1] * cy + iw[body, 3 * i + 2] * cz
 
 
 @njit(cache=True)
@@ -140,14 +141,14 @@ def _invert(M, k, w):
 
 
 @njit(cache=True)
-def anchor_rows(R, I, point, pos, quat, inv_inertia, toi, h, store):
+def anchor_rows(R, I, point, pos, iw, toi, h, store):
     """(M, MI) of the contact rows: every manifold's range, and the anchor
     rows of those with two or more points (the rows' own friction zeroed);
     toi, h: the bodies' times of impact and the substep (the touch shift)."""
     MI = manifold_ranges(I, store)
     M = take_rows(store, len(MI), MCOL)
     M[:] = 0.0
-    iw_a, iw_b, w = take_rows(store, 3, 3), take_rows(store, 3, 3), take_rows(store, 3, 3)
+    w = take_rows(store, 3, 3)
     n = take(store, 3)
     for k in range(len(MI)):
         first, count = MI[k, FIRST], MI[k, COUNT]
@@ -161,12 +162,10 @@ def anchor_rows(R, I, point, pos, quat, inv_inertia, toi, h, store):
         for i in range(3):
             n[i] = R[first, DIR + i]
         M[k, IMA], M[k, IMB] = R[first, INV_MASS_A], R[first, INV_MASS_B]
-        world_inverse_inertia(quat[a], inv_inertia[a], iw_a)
-        world_inverse_inertia(quat[b], inv_inertia[b], iw_b)
         _body_parts(M, k, AA, TA, n, cx - pos[a, 0] + s * n[0], cy - pos[a, 1] + s * n[1],
-                    cz - pos[a, 2] + s * n[2], iw_a)
+                    cz - pos[a, 2] + s * n[2], iw, a)
         _body_parts(M, k, AB, TB, n, cx - pos[b, 0] - s * n[0], cy - pos[b, 1] - s * n[1],
-                    cz - pos[b, 2] - s * n[2], iw_b)
+                    cz - pos[b, 2] - s * n[2], iw, b)
         _invert(M, k, w)
         M[k, M_MU_S], M[k, M_MU_K], M[k, RADIUS] = R[first, MU_S], R[first, MU_K], rbar
         _take_row_friction(R, M, k, first, count)
