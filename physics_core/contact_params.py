@@ -22,6 +22,8 @@ class ContactParams:
     margin: float = 0.001                # m; pairs closer than this are kept as (speculative) contacts
     shock_propagation: bool = True       # a last sweep from the ground up, each body resting on what
                                          # holds it: stacks and mass ratios (shock_propagation.py)
+    resting_block: bool = True           # in that sweep, a body resting on one support through three or
+                                         # more points is solved at once (collision/resting_block.py)
     # -- restitution (COURSE.md 5, coefficient of restitution, resting contact) --
     restitution_threshold: float = 0.5   # m/s; approach speeds below this bounce with C_R = 0
     restitution_ramp: float = 0.0        # m/s; C_R grows linearly from 0 over this band above the
@@ -69,6 +71,7 @@ def parse_contacts(r) -> ContactParams:
         restitution_iterations=r.number("restitution_iterations", d.restitution_iterations, min=0,
                                         max=1000, integer=True),
         shock_propagation=r.boolean("shock_propagation", d.shock_propagation),
+        resting_block=r.boolean("resting_block", d.resting_block),
         position_iterations=r.number("position_iterations", d.position_iterations, min=0, max=1000,
                                      integer=True),
         slop=r.number("slop", d.slop, min=0.0),

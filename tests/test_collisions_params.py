@@ -23,6 +23,7 @@ def test_every_key_is_read():
     values = dict(iterations=12, velocity_tolerance=0.0, static_friction_speed=0.02,
                   warm_start=0.5, margin=0.01, restitution_threshold=1.0, restitution_ramp=0.5,
                   restitution_combine="max", restitution_iterations=5, shock_propagation=False,
+                  resting_block=False,
                   position_iterations=2,
                   slop=0.001, correction_rate=0.5,
                   max_correction_speed=2.0, ccd=False, ccd_threshold=1.0, ccd_iterations=10,

@@ -31,7 +31,7 @@ INTEGRATOR_END_WEIGHT = {"explicit_euler": 0.0, "semi_implicit_euler": 1.0,
                          "velocity_verlet": 0.5, "rk4": 0.5, "adaptive": 0.5}
 # integer parameters (ip)
 (ITERATIONS, POSITION_ITERATIONS, CCD_ITERATIONS, CCD_ON, SLEEP_ON, RULE, RESTITUTION_ITERATIONS,
- SHOCK_ON, N_IP) = range(9)
+ SHOCK_ON, RESTING_BLOCK, N_IP) = range(10)
 
 # ip[SHOCK_ON]: updates of one manifold at most in the shock-propagation sweep
 # (shock_propagation.py); a box on four corners needed 16 to stop tilting
@@ -68,10 +68,10 @@ def contact_params(p, integrator="semi_implicit_euler"):
         p.sleep_angular_speed, p.sleep_time)
     ip = np.empty(N_IP, np.int64)
     ip[[ITERATIONS, POSITION_ITERATIONS, CCD_ITERATIONS, CCD_ON, SLEEP_ON, RULE,
-        RESTITUTION_ITERATIONS, SHOCK_ON]] = (
+        RESTITUTION_ITERATIONS, SHOCK_ON, RESTING_BLOCK]] = (
         p.iterations, p.position_iterations, p.ccd_iterations, int(p.ccd), int(p.sleep),
         RESTITUTION_RULES[p.restitution_combine], p.restitution_iterations,
-        SETTLE_PASSES if p.shock_propagation else 0)
+        SETTLE_PASSES if p.shock_propagation else 0, int(p.resting_block))
     return fp, ip
 
 

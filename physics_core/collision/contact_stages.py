@@ -14,9 +14,10 @@ from .bounce import add_bounces, collision_pass
 from .contact_build import build_rows, inertia_table
 from .contact_data import (CCD_ITERATIONS, CCD_THRESHOLD, CCD_TOLERANCE, CORRECTION_RATE,
                            END_WEIGHT, ITERATIONS, MARGIN, MAX_CORRECTION_SPEED,
-                           POSITION_ITERATIONS, RESTITUTION_ITERATIONS, RESTITUTION_RAMP,
-                           RESTITUTION_THRESHOLD, RULE, SHOCK_ON, SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_ON,
-                           SLEEP_TIME, SLOP, STATIC_SPEED, VELOCITY_TOLERANCE, WARM_FRACTION)
+                           POSITION_ITERATIONS, RESTING_BLOCK, RESTITUTION_ITERATIONS,
+                           RESTITUTION_RAMP, RESTITUTION_THRESHOLD, RULE, SHOCK_ON, SLEEP_ANGULAR,
+                           SLEEP_LINEAR, SLEEP_ON, SLEEP_TIME, SLOP, STATIC_SPEED,
+                           VELOCITY_TOLERANCE, WARM_FRACTION)
 from .contact_layout import BODY_A, BODY_B, DEPTH, ICOL, LAM, NCOL
 from .detection import detect_scratch
 from .kinetic_drift import kinetic_velocity_change
@@ -145,7 +146,7 @@ def solve_stage(fp, ip, R, I, M, MI, key, vel, omega, warm, J, masses, store):
     # a looser stop let the 20-stack's top creep 1.4 mm a second
     settle = 0.01 * fp[VELOCITY_TOLERANCE]
     if ip[SHOCK_ON] and shock_sweep(R, I, M, MI, vel, omega, len(vel), ip[SHOCK_ON], settle,
-                                    masses, store):
+                                    masses, ip[RESTING_BLOCK] != 0, store):
         friction_and_slip(R, I, vel, omega, friction, slip)
         anchor_friction_out(R, M, MI, friction)
     slide = kinetic_velocity_change(R, I, M, MI, len(vel), store)

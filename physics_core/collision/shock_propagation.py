@@ -50,6 +50,7 @@ from ..quaternion import rotate_inverse_one, row4
 from .contact_build import effective_masses
 from .contact_layout import ARM_A, ARM_B, BODY_A, BODY_B, INV_MASS_A, INV_MASS_B, LAM, TURN_A, TURN_B
 from .manifold_friction import COUNT, FIRST, IMA, IMB, M_LAM, TA, TB, _invert
+from .resting_block import MANIFOLDS, WS_SHAPE, settle_resting
 from .scratch import take, take_bools, take_int_rows, take_ints, take_rows
 from .sequential_impulses import update_manifold
 
@@ -263,7 +264,7 @@ def _sweep(one_sided, start, stop, vel, omega, levers, tolerance, moved, clock, 
 
 
 @njit(cache=True)
-def _settle(one_sided, start, stop, vel, omega, passes, tolerance, moved, clock, store):
+def _settle(one_sided, start, stop, vel, omega, passes, tolerance, moved, clock, every, store):
     """Sweeps over one layer's manifolds start..stop (the lower layer
     immovable), up to `passes`, until a sweep changes no contact-point
     velocity by more than `tolerance` (m/s; ≤ 0: all passes): the layer's
@@ -274,7 +275,9 @@ def _settle(one_sided, start, stop, vel, omega, passes, tolerance, moved, clock,
     velocities, not impulses: four coplanar corners share a load in many
     ways, so their impulses can keep trading while the body's velocity has
     long settled. A layer also stops when its change has stalled (STALL).
-    Returns the sweep count after these sweeps."""
+    Without `every`, the first sweep too updates only the manifolds of
+    bodies marked moved (for sweep clock + 1). Returns the sweep count after
+    these sweeps."""
     R1, I1, M1, MI1 = one_sided
     levers = take(store, stop - start)
     for m in range(start, stop):
@@ -284,7 +287,7 @@ def _settle(one_sided, start, stop, vel, omega, passes, tolerance, moved, clock,
     for p in range(passes):
         clock += 1
         change = _sweep(one_sided, start, stop, vel, omega, levers, tolerance, moved, clock,
-                        p == 0, before)
+                        every and p == 0, before)
         if tolerance > 0.0 and change < tolerance:
             break
         if change > STALL * earlier:
@@ -343,8 +346,62 @@ def _upper_bodies(I1, MI1, layer, g, e, mark, store):
 
 
 @njit(cache=True)
+def _settle_resting(one_sided, g, e, vel, omega, layer, masses, moved, clock, tolerance,
+                    resting):
+    """Each upper body of manifolds g..e with all its manifolds there, solved
+    at once if it rests on them (resting_block.py). The bodies not solved
+    are marked moved for sweep clock + 1 and the solved ones not moved, so
+    the sweeps that follow start from the others alone. True when every one was (the layer then needs no
+    sweeps). resting = (on, uses (n,) zero on entry and on return, the
+    solve's workspace, room for one body's manifolds)."""
+    on, uses, ws, ms = resting
+    R1, I1, M1, MI1 = one_sided
+    for m in range(g, e):
+        uses[_upper(I1, MI1, m, layer)] += 1
+    solved = True
+    for m in range(g, e):
+        body = _upper(I1, MI1, m, layer)
+        if uses[body] < 0:
+            continue                     # solved or given up with an earlier manifold of it
+        k = _body_manifolds(MI1, I1, m, e, layer, body, uses[body], ms)
+        if k == 0 or not settle_resting(one_sided, ms[:k], vel, omega, masses, tolerance, ws):
+            solved = False
+            moved[body] = clock + 1
+        else:
+            moved[body] = -1             # at rest on its supports: no sweep need visit it
+        uses[body] = -1
+    for m in range(g, e):
+        uses[_upper(I1, MI1, m, layer)] = 0
+    return solved
+
+
+@njit(cache=True)
+def _body_manifolds(MI1, I1, m, e, layer, body, count, ms):
+    """ms[:k] ← manifold m and the `count` − 1 after it (up to e) whose upper
+    body is `body`; k, or 0 when they cannot be solved together (more than
+    ms holds, or m has a single point)."""
+    if count > len(ms) or MI1[m, COUNT] < 2:
+        return 0
+    k = 0
+    for q in range(m, e):
+        if _upper(I1, MI1, q, layer) == body:
+            ms[k] = q
+            k += 1
+            if k == count:
+                break
+    return k
+
+
+@njit(cache=True, inline="always")
+def _upper(I1, MI1, m, layer):
+    """The body of manifold m in the higher layer."""
+    a, b = I1[MI1[m, FIRST], BODY_A], I1[MI1[m, FIRST], BODY_B]
+    return a if layer[a] > layer[b] else b
+
+
+@njit(cache=True)
 def _settle_guarded(one_sided, g, e, vel, omega, passes, tolerance, moved, clock, layer, masses,
-                    kept, mark, store):
+                    kept, mark, resting, store):
     """_settle for one layer, undone if it gave the layer's bodies kinetic
     energy: resting on what holds it removes approach and slip, so a layer
     that gains energy was made to follow a support it cannot follow (a box
@@ -357,7 +414,11 @@ def _settle_guarded(one_sided, g, e, vel, omega, passes, tolerance, moved, clock
         for j in range(3):
             saved[k, j], saved[k, 3 + j] = vel[upper[k], j], omega[upper[k], j]
     before = _kinetic_energy(upper, vel, omega, masses)
-    clock = _settle(one_sided, g, e, vel, omega, passes, tolerance, moved, clock, store)
+    if not resting[0]:
+        clock = _settle(one_sided, g, e, vel, omega, passes, tolerance, moved, clock, True, store)
+    elif not _settle_resting(one_sided, g, e, vel, omega, layer, masses, moved, clock, tolerance,
+                             resting):
+        clock = _settle(one_sided, g, e, vel, omega, passes, tolerance, moved, clock, False, store)
     if _kinetic_energy(upper, vel, omega, masses) > before * (1.0 + GAIN) + 1e-300:
         for k in range(len(upper)):
             for j in range(3):
@@ -367,10 +428,12 @@ def _settle_guarded(one_sided, g, e, vel, omega, passes, tolerance, moved, clock
 
 
 @njit(cache=True)
-def shock_sweep(R, I, M, MI, vel, omega, n, passes, tolerance, masses, store):
+def shock_sweep(R, I, M, MI, vel, omega, n, passes, tolerance, masses, block, store):
     """The ordered one-sided sweep (module docstring), layer after layer from
-    the ground up, each settled in turn (`_settle_guarded`); the rows' and
-    anchors' λ updated in place. Returns the number of manifolds visited."""
+    the ground up, each settled in turn (`_settle_guarded`; with `block`, a
+    body resting on one support through three or more points at once,
+    resting_block.py); the rows' and anchors' λ updated in place. Returns
+    the number of manifolds visited."""
     if len(MI) == 0:
         return 0
     layer = support_layers(R, I, n, store)
@@ -382,6 +445,10 @@ def shock_sweep(R, I, M, MI, vel, omega, n, passes, tolerance, masses, store):
     kept[:] = True
     mark = take_bools(store, n)
     mark[:] = False
+    uses = take_ints(store, n)
+    uses[:] = 0
+    resting = (block, uses, take_rows(store, WS_SHAPE[0], WS_SHAPE[1]),
+               take_ints(store, MANIFOLDS))
     clock = 0
     g = 0
     while g < len(order):
@@ -389,7 +456,7 @@ def shock_sweep(R, I, M, MI, vel, omega, n, passes, tolerance, masses, store):
         while e < len(order) and top[e] == top[g]:
             e += 1
         clock = _settle_guarded(one_sided, g, e, vel, omega, passes, tolerance, moved, clock,
-                                layer, masses, kept, mark, store)
+                                layer, masses, kept, mark, resting, store)
         g = e
     _scatter_impulses(R, M, MI, order, one_sided[0], one_sided[2], one_sided[3], kept)
     return len(order)
