@@ -144,3 +144,20 @@ def test_resting_solve_on_and_off_agree_to_the_sweeps_tolerance(scene):
     # up to what the sweeps leave (their tolerance, 1e-6 m/s, over 2 s)
     assert np.abs(on.state.pos - off.state.pos).max() < 1e-4
     assert np.abs(on.state.vel).max() < 1e-3 and np.abs(off.state.vel).max() < 1e-3
+
+
+def test_a_solve_that_leaves_one_point_pulling_is_refused():
+    """The whole face still pushes (its total is > 0), but one corner would
+    pull: a contact cannot, so the face is left to the sweeps."""
+    from physics_core.collision.resting_block import VEC, _holds
+    w = world([cube("c", 0.1 - 0.001)])
+    w.step(60)
+    one_sided, _, _, _ = one_sided_manifolds(w)
+    R1, _, M1, MI1 = one_sided
+    first, count = MI1[0, FIRST], MI1[0, COUNT]
+    ws = np.zeros(WS_SHAPE)
+    ws[VEC, 1:count] = 1e-3                     # three corners push harder
+    assert _holds(R1, M1, MI1, 0, ws, 0)
+    ws[VEC, 0] = -R1[first, LAM] - 1e-4         # and one would pull
+    assert not _holds(R1, M1, MI1, 0, ws, 0)
+    assert R1[first:first + count, LAM].sum() + ws[VEC, :count].sum() > 0.0
