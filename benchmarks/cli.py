@@ -2,7 +2,7 @@
 
     physics-bench accuracy  [--quick] [--out DIR]   integrators × dt × substeps, contacts
     physics-bench stability [--quick] [--out DIR]   hard cases, stiff spring, long runs, random scenes
-    physics-bench scale     [--quick] [--out DIR]   piles and pyramid beside PyBullet and MuJoCo
+    physics-bench scale     [--quick] [--out DIR]   sphere and box piles and the pyramid beside PyBullet and MuJoCo
     physics-bench effects   [--quick] [--out DIR]   per-effect cost table
     physics-bench node      [--quick] [--out DIR]   ROS 2 node in real time: step, publish, recording cost
     physics-bench crosscheck [--quick] [--out DIR]  closed-form scenes beside PyBullet and MuJoCo
