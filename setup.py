@@ -17,7 +17,8 @@ setup(
         ("share/" + PACKAGE + "/scenes", sorted(glob("scenes/*.yaml"))),
         ("share/" + PACKAGE + "/layouts", sorted(glob("layouts/*.json"))),
     ],
-    package_data={"physics_core": ["data/*.yaml"]},
+    # physics_node/data: the Fast DDS profile for service replies (physics_node/dds_profile.py)
+    package_data={"physics_core": ["data/*.yaml"], "physics_node": ["data/*.xml"]},
     include_package_data=True,
     python_requires=">=3.11",
     install_requires=["numpy>=1.24", "pyyaml>=6", "mcap>=1.1", "numba>=0.60"],

@@ -17,6 +17,7 @@ from rclpy.signals import SignalHandlerOptions
 
 from physics_core import SceneError
 
+from .dds_profile import use_reply_profile
 from .foxglove_server import FoxgloveError
 from .node import PhysicsNode
 from .parameters import ODOMETRY_MODES, ParameterValueError, coerce
@@ -189,6 +190,7 @@ def main(argv=None):
         return 2
     stop = StopRequest()
     stop.install()
+    use_reply_profile()     # before rclpy.init: no service reply lost to slow discovery
     rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
     node = None
     status = 0

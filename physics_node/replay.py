@@ -13,6 +13,7 @@ from rosgraph_msgs.msg import Clock
 
 from msg_adapters import message_class, time_msg
 
+from .dds_profile import use_reply_profile
 from .qos import LATCHED, STREAM
 from .recording_reader import Recording, recover
 from .resimulate import ERROR, resimulate
@@ -69,6 +70,7 @@ def main(argv=None):
     if not 0 <= args.rate < float("inf"):
         print(f"error: --rate must be a finite number >= 0, got {args.rate!r}", file=sys.stderr)
         return ERROR
+    use_reply_profile()     # before rclpy.init: no service reply lost to slow discovery
     rclpy.init(args=argv)
     node = rclpy.create_node(REPLAY_NODE)
     try:

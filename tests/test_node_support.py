@@ -19,6 +19,8 @@ from pathlib import Path
 
 import pytest
 
+from physics_node.dds_profile import use_reply_profile
+
 REPO = Path(__file__).resolve().parents[1]
 # Every wait here is on a condition; its deadline only bounds a hang, so it
 # can be generous without slowing a passing run. A 2-core machine shared with
@@ -60,6 +62,11 @@ os.environ["ROS_DOMAIN_ID"] = DOMAIN_ID
 ISOLATED_DOMAIN_ID = str(int(DOMAIN_ID) + 100)
 os.environ.setdefault("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+# The node's own Fast DDS profile (service replies wait up to 5 s for the
+# caller's reader), set here before any rclpy.init in this process: the
+# drivers' services answer like the node's, and every node this process
+# starts inherits the same variables.
+use_reply_profile()
 
 import rclpy  # noqa: E402  (the environment above must be set first)
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
