@@ -3,9 +3,9 @@
 Each stage is its own compiled function (integration.py for the integrator
 and the force effects, collision/contact_substep.py for the contact stages),
 timed with the cycle counter into `prof` and followed by the finite check.
-Looping in compiled code means a step pays no interpreter cost: a one-body
-world steps in about a microsecond, and the arguments below are passed once
-per call of world.step(n), not once per step.
+Looping in compiled code means a step pays no interpreter cost, and the
+inputs (step_inputs.py: one object holding every array) are passed once per
+call of world.step(n), not once per step.
 
 `run_steps` returns (steps done, failed stage): failed is -1, or the stage
 after which some body's state was not finite (the World names it and the
@@ -90,15 +90,25 @@ def _one_step(substeps, dt, code, idata, body, loads, masses, work, contacts, ad
 
 
 @njit(cache=True)
-def run_steps(n, substeps, dt, code, idata, body, loads, masses, work, contacts, warm_keys,
-              warm_values, event_ints, event_floats, event_counts, scratch, adaptive, prof):
-    """Up to n steps; (steps done, failed stage or -1). `contacts` = (contact
-    model, float and int parameters, sleep state, scratch counts); the warm
-    cache and the event log's typed lists come as arguments of their own
-    (numba types a tuple holding typed lists anew on every call, which costs
-    tens of microseconds; alone, a list costs well under one), and so does the
-    contact stages' scratch store (collision/scratch.py). `adaptive` is
-    adaptive.adaptive_data's tuple (unused_adaptive() for a fixed integrator)."""
+def run_steps(inputs, n, substeps, dt, code):
+    """Up to n steps of `substeps` substeps of dt / substeps with integrator
+    `code`; (steps done, failed stage or -1). `inputs` is a
+    step_inputs.StepInputs: the integrator's data, the body arrays, the
+    loads, the masses, `contacts` = (contact model, float and int
+    parameters, sleep state, scratch counts), the warm cache's and the event
+    log's typed lists, the contact stages' scratch store
+    (collision/scratch.py), adaptive.adaptive_data's tuple (unused_adaptive()
+    for a fixed integrator) and the prof slots."""
+    return _run(n, substeps, dt, code, inputs.idata, inputs.body,
+                inputs.loads, inputs.masses, inputs.work, inputs.contacts, inputs.warm_keys,
+                inputs.warm_values, inputs.event_ints, inputs.event_floats, inputs.event_counts,
+                inputs.scratch, inputs.adaptive, inputs.prof)
+
+
+@njit(cache=True, inline="always")
+def _run(n, substeps, dt, code, idata, body, loads, masses, work, contacts, warm_keys,
+         warm_values, event_ints, event_floats, event_counts, scratch, adaptive, prof):
+    """run_steps on its inputs unpacked, each borrowed for the call (borrowed.py)."""
     cm, fp, ip, sleep, cap = borrow(contacts)
     lists = borrow((warm_keys, warm_values, event_ints, event_floats, event_counts, scratch))
     packed = (cm, fp, ip, sleep, (lists[0], lists[1]), (lists[2], lists[3], lists[4]), cap,

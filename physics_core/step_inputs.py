@@ -1,0 +1,54 @@
+"""The step loop's inputs as one compiled object, built once, passed every call.
+
+world.step(n) used to hand the compiled loop about 75 arrays, typed lists
+and scalars as separate arguments. Numba's dispatcher types and unboxes each
+argument on every call: about 16 µs a call, twice the whole compiled step
+of a one-body scene, paid by every world.step(1) a ROS timer makes.
+
+`StepInputs` is a Numba structure reference (numba.experimental.structref)
+holding them all: the dispatcher then types and unboxes one object (about
+1 µs). `pack(...)` builds it through an ordinary typed call, so its fields
+have exactly the types of the arrays given (nothing is trusted blindly);
+the World packs again whenever one of those arrays is replaced (a body
+added or removed, a reset, bodies woken from Python, a state array
+assigned), which `inputs_key` detects. The structure keeps a reference to
+every array it holds, so none of them can be freed while it is in use.
+"""
+from numba import njit, types
+from numba.experimental import structref
+
+FIELDS = ("idata", "body", "loads", "masses", "work", "contacts",
+          "warm_keys", "warm_values", "event_ints", "event_floats", "event_counts", "scratch",
+          "adaptive", "prof")
+
+
+@structref.register
+class StepInputsType(types.StructRef):
+    def preprocess_fields(self, fields):
+        return tuple((name, types.unliteral(typ)) for name, typ in fields)
+
+
+class StepInputs(structref.StructRefProxy):
+    """Opaque from Python: read the World's own attributes instead."""
+
+
+structref.define_constructor(StepInputs, StepInputsType, FIELDS)
+structref.define_boxing(StepInputsType, StepInputs)
+
+
+@njit(cache=True)
+def pack(idata, body, loads, masses, work, contacts, warm_keys, warm_values,
+         event_ints, event_floats, event_counts, scratch, adaptive, prof):
+    """The StepInputs of these arguments (see step_loop.run_steps for each)."""
+    return StepInputs(idata, body, loads, masses, work, contacts, warm_keys,
+                      warm_values, event_ints, event_floats, event_counts, scratch, adaptive, prof)
+
+
+def inputs_key(state, contact_system):
+    """What decides whether packed inputs are still those of the World: the
+    identities of the state arrays the step reads and writes, and the contact
+    system with the generation of its kept state. Identities are safe here:
+    the packed inputs hold the arrays, so no id can be reused while they live."""
+    return (id(state.pos), id(state.quat), id(state.vel), id(state.omega), id(state.awake),
+            id(state.user_force), id(state.user_force_offset), id(state.user_torque),
+            id(contact_system), getattr(contact_system, "generation", 0))
