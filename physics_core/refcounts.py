@@ -15,8 +15,9 @@ its runtime. Pruning is unchanged (it still runs before inlining can
 happen), and so is the counting itself; inlined, a borrowed array's count
 is a test of a constant null pointer that the compiler removes. It must run
 before numba's runtime is first compiled (physics_core/__init__.py calls it
-first thing); afterwards it changes nothing and returns False, and kernels
-compiled then count through calls as before (the same results, slower).
+first thing); afterwards, or on a numba whose runtime is built differently,
+it changes nothing and returns False, and kernels compiled then count
+through calls as before (the same results, slower).
 """
 from numba.core.runtime import nrt, nrtdynmod
 
@@ -37,10 +38,11 @@ def _inlinable(define):
 
 def inline_reference_counts():
     """True when numba's runtime will be compiled with inlinable counters."""
-    if getattr(nrtdynmod._define_nrt_incref, "inlinable", False):
+    define = getattr(nrtdynmod, "_define_nrt_incref", None)
+    if getattr(define, "inlinable", False):
         return True
-    if nrt.rtsys._init:
-        return False
+    if define is None or getattr(nrt.rtsys, "_init", True):
+        return False              # compiled already, or a numba without these internals
     nrtdynmod._define_nrt_incref = _inlinable(nrtdynmod._define_nrt_incref)
     nrtdynmod._define_nrt_decref = _inlinable(nrtdynmod._define_nrt_decref)
     return True
