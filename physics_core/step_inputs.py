@@ -11,7 +11,7 @@ holding them all: the dispatcher then types and unboxes one object (about
 have exactly the types of the arrays given (nothing is trusted blindly);
 the World packs again whenever one of those arrays is replaced (a body
 added or removed, a reset, bodies woken from Python, a state array
-assigned), which `inputs_key` detects. The structure keeps a reference to
+assigned: the last is what `inputs_key` detects). The structure keeps a reference to
 every array it holds, so none of them can be freed while it is in use.
 """
 from numba import njit, types
@@ -44,11 +44,13 @@ def pack(idata, body, loads, masses, work, contacts, warm_keys, warm_values,
                       warm_values, event_ints, event_floats, event_counts, scratch, adaptive, prof)
 
 
-def inputs_key(state, contact_system):
-    """What decides whether packed inputs are still those of the World: the
-    identities of the state arrays the step reads and writes, and the contact
-    system with the generation of its kept state. Identities are safe here:
-    the packed inputs hold the arrays, so no id can be reused while they live."""
+def inputs_key(state):
+    """What the World cannot see replaced: the identities of the state arrays
+    the step reads and writes (anyone may assign one). Everything else in
+    the inputs is the World's own or its contact system's, replaced only in
+    World._build and World.refresh_awake (which reset() ends with), and
+    those drop the packed inputs themselves.
+    Identities are safe: the packed inputs hold the arrays, so no id can be
+    reused while they live."""
     return (id(state.pos), id(state.quat), id(state.vel), id(state.omega), id(state.awake),
-            id(state.user_force), id(state.user_force_offset), id(state.user_torque),
-            id(contact_system), getattr(contact_system, "generation", 0))
+            id(state.user_force), id(state.user_force_offset), id(state.user_torque))

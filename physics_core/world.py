@@ -132,7 +132,7 @@ class World(CommandsMixin, ReadingMixin):
         """The step loop's inputs (step_inputs.py), packed again only when an
         array in them was replaced since the last step."""
         s, cs = self.state, self.contact_system
-        key = inputs_key(s, cs)
+        key = inputs_key(s)
         if self._packed is None or self._packed[0] != key:
             contacts, (warm_keys, warm_values), (ints, floats, counts), scratch = (
                 cs.args() if cs is not None else _NO_CONTACTS)

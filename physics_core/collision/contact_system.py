@@ -5,8 +5,7 @@ compiled code reads and grows (contact_data.py).
 `ContactSystem(model, params)`:
 - `stage_names`: the stages in order, only those the parameters switch on;
 - `args()`: what the compiled step loop passes to the contact stages
-  (step_loop.py, contact_substep.run); `generation` changes whenever one of
-  those is replaced (the World's packed step inputs, step_inputs.py);
+  (step_loop.py, contact_substep.run);
 - `events()`: the last step's ContactEvents;
 - `bodies_changed(...)`: the kept state renumbered after add/remove_body.
 """
@@ -37,7 +36,6 @@ class ContactSystem:
 
     def reset(self):
         n = self.model.n
-        self.generation = getattr(self, "generation", 0) + 1   # the World packs its inputs again
         self.warm = new_warm_cache()
         self.sleep = new_sleep_state(n)
         self.events_state = new_event_state()
@@ -62,7 +60,6 @@ class ContactSystem:
         events_bodies_changed(self.events_state, n_old, n_new, new_index)
         self.cap = old.cap
         self.scratch = old.scratch      # grown as needed: any size serves
-        self.generation += 1
 
 
 
