@@ -4,6 +4,7 @@
 Each check runs in a fresh process: whether the counters are inlinable is
 decided once, when numba first compiles its runtime."""
 import json
+import os
 import subprocess
 import sys
 
@@ -13,7 +14,6 @@ ROOT = __file__.rsplit("/tests/", 1)[0]
 
 
 def _run(code, env=None):
-    import os
     full_env = dict(os.environ)
     full_env.update(env or {})
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=full_env,
