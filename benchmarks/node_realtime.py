@@ -140,10 +140,15 @@ def scene(case, seed=1):
 # ---- ROS environment ------------------------------------------------------------
 
 def ros_environment():
-    """Localhost-only discovery and a domain of our own unless the caller set one."""
+    """Localhost-only discovery and a domain of our own unless the caller set
+    one, and the node's Fast DDS profile (physics_node/dds_profile.py): the
+    node measured here runs in this process, so it gets the environment
+    physics-node gives itself."""
+    from physics_node.dds_profile import use_reply_profile
     os.environ.setdefault("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     os.environ.setdefault("ROS_DOMAIN_ID", str(201 + os.getpid() % 30))
+    use_reply_profile()
     return dict(os.environ)
 
 
