@@ -30,14 +30,17 @@ from numba import njit
 
 from .contact_build import start_separation, touch_shift
 from .kinetic_bound import kinetic_bound
-from .contact_layout import (BODY_A, BODY_B, DEPTH, DIR, INV_MASS_A, INV_MASS_B, LAM, MU_K, MU_S,
-                             SLIDING, U0)
+from .contact_layout import (ARM_A, ARM_B, BODY_A, BODY_B, DEPTH, DIR, INV_MASS_A, INV_MASS_B, LAM,
+                             MU_K, MU_S, SLIDING, TURN_A, TURN_B, U0)
+from .pair_velocity import pair_impulse, pair_velocity
 from .scratch import take, take_int_rows, take_rows
 
 # float columns: per row r (3): linear direction L, angular parts for a and b,
-# I_w⁻¹ times them; then the bodies' inverse masses, W⁻¹ (3×3), μ_s, μ_k, r̄, λ (3)
-L, AA, AB, TA, TB = 0, 9, 18, 27, 36
-IMA, IMB, W_INV, M_MU_S, M_MU_K, RADIUS, M_LAM, MCOL = 45, 46, 47, 56, 57, 58, 59, 62
+# I_w⁻¹ times them, and the bodies' inverse masses, in the contact rows'
+# columns (pair_velocity.py updates both tables); then W⁻¹ (3×3), μ_s, μ_k,
+# r̄, λ (3)
+L, AA, AB, TA, TB, IMA, IMB = DIR, ARM_A, ARM_B, TURN_A, TURN_B, INV_MASS_A, INV_MASS_B
+W_INV, M_MU_S, M_MU_K, RADIUS, M_LAM, MCOL = 47, 56, 57, 58, 59, 62
 # int columns: first row, number of rows, sliding (kinetic friction this substep)
 FIRST, COUNT, M_SLIDING, MICOL = 0, 1, 2, 3
 _TINY = 1e-300
@@ -217,23 +220,36 @@ def anchor_warm_start(M, MI, I, vel, omega):
                     anchor_impulse(M, k, r, M[k, M_LAM + r], a, b, vel, omega)
 
 
-@njit(cache=True)
-def update_anchor(R, I, M, MI, k, vel, omega):
-    """One update of manifold k's anchor; returns its largest impulse change."""
-    first, count = MI[k, FIRST], MI[k, COUNT]
-    a, b = I[first, BODY_A], I[first, BODY_B]
+@njit(cache=True, inline="always")
+def update_anchor(R, M, k, first, count, sliding, p):
+    """One update of manifold k's anchor (rows first..first + count − 1) on
+    its pair's velocities p (pair_velocity.py: the anchor table shares the
+    rows' column layout); sliding: its kinetic flag (MI's M_SLIDING). Returns
+    (p after it, its largest impulse change)."""
     ln = 0.0
     for c in range(first, first + count):
         ln += R[c, LAM]
-    u0 = anchor_velocity(M, k, 0, a, b, vel, omega)
-    u1 = anchor_velocity(M, k, 1, a, b, vel, omega)
-    u2 = anchor_velocity(M, k, 2, a, b, vel, omega)
+    u0 = pair_velocity(M, k, 0, p)
+    u1 = pair_velocity(M, k, 1, p)
+    u2 = pair_velocity(M, k, 2, p)
     old0, old1, old2 = M[k, M_LAM], M[k, M_LAM + 1], M[k, M_LAM + 2]
     o = W_INV
     n0 = old0 - (M[k, o] * u0 + M[k, o + 1] * u1 + M[k, o + 2] * u2)
     n1 = old1 - (M[k, o + 3] * u0 + M[k, o + 4] * u1 + M[k, o + 5] * u2)
     n2 = old2 - (M[k, o + 6] * u0 + M[k, o + 7] * u1 + M[k, o + 8] * u2)
-    sliding = MI[k, M_SLIDING] != 0
+    n0, n1, n2 = _anchor_cap(M, k, n0, n1, n2, ln, sliding)
+    M[k, M_LAM], M[k, M_LAM + 1], M[k, M_LAM + 2] = n0, n1, n2
+    p = pair_impulse(M, k, 0, n0 - old0, p)
+    p = pair_impulse(M, k, 1, n1 - old1, p)
+    p = pair_impulse(M, k, 2, n2 - old2, p)
+    return p, max(abs(n0 - old0), max(abs(n1 - old1), abs(n2 - old2)))
+
+
+@njit(cache=True, inline="always")
+def _anchor_cap(M, k, n0, n1, n2, ln, sliding):
+    """Coulomb's bound on the anchor's impulses: tangential within μ Σλ_n,
+    the twist within μ Σλ_n r̄."""
+    o = W_INV
     mu = M[k, M_MU_K] if sliding else M[k, M_MU_S]
     lim = mu * ln
     mag2 = n0 * n0 + n1 * n1
@@ -245,12 +261,7 @@ def update_anchor(R, I, M, MI, k, vel, omega):
             s = lim / math.sqrt(mag2 + _TINY)
             n0, n1 = n0 * s, n1 * s
     twist = mu * ln * M[k, RADIUS]
-    n2 = min(max(n2, -twist), twist)
-    M[k, M_LAM], M[k, M_LAM + 1], M[k, M_LAM + 2] = n0, n1, n2
-    anchor_impulse(M, k, 0, n0 - old0, a, b, vel, omega)
-    anchor_impulse(M, k, 1, n1 - old1, a, b, vel, omega)
-    anchor_impulse(M, k, 2, n2 - old2, a, b, vel, omega)
-    return max(abs(n0 - old0), max(abs(n1 - old1), abs(n2 - old2)))
+    return n0, n1, min(max(n2, -twist), twist)
 
 
 @njit(cache=True)

@@ -25,7 +25,8 @@ from numba import njit
 
 from .contact_build import row_velocity
 from .kinetic_bound import kinetic_bound
-from .manifold_friction import COUNT, FIRST, update_anchor
+from .manifold_friction import COUNT, FIRST, M_SLIDING, update_anchor
+from .pair_velocity import load_pair, pair_impulse, pair_velocity, store_pair
 from .contact_layout import (BIAS, BODY_A, BODY_B, DIR, G_TN, INV_MASS_A, INV_MASS_B, LAM, MASS_N,
                              MU, SLIDING, TURN_A, TURN_B, W_TT_INV)
 
@@ -70,13 +71,13 @@ def friction_cap(R, c, lt1, lt2, ln, sliding):
     return lt1 * scale, lt2 * scale
 
 
-@njit(cache=True)
-def update_contact(R, I, c, vel, omega):
-    """One Gauss–Seidel update of contact c; returns its largest impulse change."""
-    a, b = I[c, BODY_A], I[c, BODY_B]
-    un = row_velocity(R, c, 0, a, b, vel, omega)
-    u1 = row_velocity(R, c, 1, a, b, vel, omega)
-    u2 = row_velocity(R, c, 2, a, b, vel, omega)
+@njit(cache=True, inline="always")
+def update_contact(R, I, c, p):
+    """One Gauss–Seidel update of contact c on its pair's velocities p
+    (pair_velocity.py); returns (p after it, its largest impulse change)."""
+    un = pair_velocity(R, c, 0, p)
+    u1 = pair_velocity(R, c, 1, p)
+    u2 = pair_velocity(R, c, 2, p)
     old_n, old_1, old_2 = R[c, LAM], R[c, LAM + 1], R[c, LAM + 2]
     ln = max(old_n - R[c, MASS_N] * (un - R[c, BIAS]), 0.0)
     dn = ln - old_n
@@ -88,39 +89,45 @@ def update_contact(R, I, c, vel, omega):
     lt2 = old_2 - s2 - R[c, G_TN + 1] * dn
     lt1, lt2 = friction_cap(R, c, lt1, lt2, ln, I[c, SLIDING] != 0)
     R[c, LAM], R[c, LAM + 1], R[c, LAM + 2] = ln, lt1, lt2
-    apply_impulse(R, c, 0, dn, a, b, vel, omega)
-    apply_impulse(R, c, 1, lt1 - old_1, a, b, vel, omega)
-    apply_impulse(R, c, 2, lt2 - old_2, a, b, vel, omega)
-    return max(abs(dn), max(abs(lt1 - old_1), abs(lt2 - old_2)))
+    p = pair_impulse(R, c, 0, dn, p)
+    p = pair_impulse(R, c, 1, lt1 - old_1, p)
+    p = pair_impulse(R, c, 2, lt2 - old_2, p)
+    return p, max(abs(dn), max(abs(lt1 - old_1), abs(lt2 - old_2)))
 
 
-@njit(cache=True)
-def update_normal(R, I, c, vel, omega):
-    """The normal row of contact c alone (its friction is its manifold's anchor)."""
-    a, b = I[c, BODY_A], I[c, BODY_B]
-    un = row_velocity(R, c, 0, a, b, vel, omega)
+@njit(cache=True, inline="always")
+def update_normal(R, c, p):
+    """The normal row of contact c alone (its friction is its manifold's
+    anchor), on the pair's velocities p: (p after it, |Δλ|)."""
+    un = pair_velocity(R, c, 0, p)
     old = R[c, LAM]
     ln = max(old - R[c, MASS_N] * (un - R[c, BIAS]), 0.0)
     R[c, LAM] = ln
-    apply_impulse(R, c, 0, ln - old, a, b, vel, omega)
-    return abs(ln - old)
+    return pair_impulse(R, c, 0, ln - old, p), abs(ln - old)
 
 
 @njit(cache=True)
 def update_manifold(R, I, M, MI, k, vel, omega):
     """One update of manifold k: a single point as one contact; two or more,
     their normal rows, then their friction anchor (manifold_friction.py).
-    Returns its largest impulse change (NaN if any change is NaN)."""
+    Its two bodies' velocities are loaded once and stored once
+    (pair_velocity.py). Returns its largest impulse change (NaN if any
+    change is NaN)."""
     first, count = MI[k, FIRST], MI[k, COUNT]
+    a, b = I[first, BODY_A], I[first, BODY_B]
+    p = load_pair(vel, omega, a, b)
     if count < 2:
-        return update_contact(R, I, first, vel, omega)
-    change = 0.0
-    for c in range(first, first + count):
-        d = update_normal(R, I, c, vel, omega)
-        if not d < change:
-            change = d
-    d = update_anchor(R, I, M, MI, k, vel, omega)
-    return d if not d < change else change
+        p, change = update_contact(R, I, first, p)
+    else:
+        change = 0.0
+        for c in range(first, first + count):
+            p, d = update_normal(R, c, p)
+            if not d < change:
+                change = d
+        p, d = update_anchor(R, M, k, first, count, MI[k, M_SLIDING] != 0, p)
+        change = d if not d < change else change
+    store_pair(vel, omega, a, b, p)
+    return change
 
 
 @njit(cache=True)
