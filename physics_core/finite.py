@@ -29,6 +29,16 @@ def all_finite(pos, quat, vel, omega):
 
 
 @njit(cache=True)
+def velocities_finite(vel, omega):
+    """all_finite for a stage that changes velocities only (the poses were
+    checked after the stage that last moved them)."""
+    for i in range(len(vel)):
+        if not (_row_finite(vel, i) and _row_finite(omega, i)):
+            return False
+    return True
+
+
+@njit(cache=True)
 def non_finite_bodies(pos, quat, vel, omega):
     """Indices of the bodies with a NaN or inf in their pose or velocity."""
     bad = np.zeros(len(pos), np.bool_)

@@ -10,7 +10,7 @@ from numba import njit
 
 from ..borrowed import borrow, keep_alive
 from ..cycle_clock import cycles
-from ..finite import all_finite
+from ..finite import all_finite, velocities_finite
 from .contact_data import (CCD_ITERATIONS, CCD_ON, CCD_THRESHOLD, CCD_TOLERANCE, MARGIN,
                            SLEEP_ON)
 from .contact_layout import LAM, U0
@@ -141,13 +141,13 @@ def _respond(cm, fp, ip, s, masses, start, sleep, warm, events, h, dt, last, pro
     target, tau, J = restitution_stage(fp, ip, R, I, M, MI, vel, omega, start[2], start[3], h,
                                        store)
     prof[RESTITUTION] += cycles() - t
-    if not _finite(pos, quat, vel, omega):
+    if not velocities_finite(vel, omega):       # the pass changes velocities only
         return RESTITUTION
     t = cycles()
     friction, _, slide = solve_stage(fp, ip, R, I, M, MI, contacts[5], vel, omega, warm, J,
                                      (masses[0], masses[1], quat), store)
     prof[SOLVE] += cycles() - t
-    if not _finite(pos, quat, vel, omega):
+    if not velocities_finite(vel, omega):       # as does the solve
         return SOLVE
     t = cycles()
     if moves:

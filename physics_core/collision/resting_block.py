@@ -37,8 +37,8 @@ from ..quaternion import rotate_inverse_one, rotate_one, row4
 from .contact_build import row_velocity
 from .contact_layout import ARM_A, ARM_B, BIAS, BODY_A, BODY_B, DIR, INV_MASS_A, INV_MASS_B, LAM
 from .manifold_friction import (AA, AB, COUNT, FIRST, L, M_LAM, M_MU_S, M_SLIDING, RADIUS,
-                                anchor_impulse, anchor_velocity)
-from .sequential_impulses import apply_impulse
+                                anchor_velocity)
+from .pair_velocity import load_pair, pair_impulse, store_pair
 
 MANIFOLDS = 4         # a body's manifolds solved together at most
 ROWS = 7 * MANIFOLDS  # four normal rows and an anchor's three each
@@ -80,7 +80,7 @@ def _factor(ws, k):
     all six velocities: collinear points)."""
     top = 0.0
     for p in range(6):
-        for q in range(6):
+        for q in range(p + 1):          # the factorisation reads the lower triangle only
             s = 0.0
             for j in range(k):
                 s += ws[j, p] * ws[j, q]
@@ -257,14 +257,16 @@ def _apply(R1, I1, M1, MI1, ms, vel, omega, ws):
     for m in ms:
         first, count = MI1[m, FIRST], MI1[m, COUNT]
         a, b = I1[first, BODY_A], I1[first, BODY_B]
+        p = load_pair(vel, omega, a, b)
         for c in range(first, first + count):
             R1[c, LAM] += ws[VEC, j]
-            apply_impulse(R1, c, 0, ws[VEC, j], a, b, vel, omega)
+            p = pair_impulse(R1, c, 0, ws[VEC, j], p)
             j += 1
         for r in range(3):
             M1[m, M_LAM + r] += ws[VEC, j]
-            anchor_impulse(M1, m, r, ws[VEC, j], a, b, vel, omega)
+            p = pair_impulse(M1, m, r, ws[VEC, j], p)
             j += 1
+        store_pair(vel, omega, a, b, p)
 
 
 @njit(cache=True)

@@ -50,9 +50,11 @@ def warm_start(R, I, vel, omega):
     """Apply the impulses λ the rows start with (loaded from last substep)."""
     for c in range(len(R)):
         a, b = I[c, BODY_A], I[c, BODY_B]
+        p = load_pair(vel, omega, a, b)
         for r in range(3):
             if R[c, LAM + r] != 0.0:
-                apply_impulse(R, c, r, R[c, LAM + r], a, b, vel, omega)
+                p = pair_impulse(R, c, r, R[c, LAM + r], p)
+        store_pair(vel, omega, a, b, p)
 
 
 @njit(cache=True)
@@ -106,26 +108,31 @@ def update_normal(R, c, p):
     return pair_impulse(R, c, 0, ln - old, p), abs(ln - old)
 
 
+@njit(cache=True, inline="always")
+def manifold_update(R, I, M, MI, k, p):
+    """One update of manifold k on its pair's velocities p
+    (pair_velocity.py): a single point as one contact; two or more, their
+    normal rows, then their friction anchor (manifold_friction.py).
+    Returns (p after it, its largest impulse change; NaN if any is NaN)."""
+    first, count = MI[k, FIRST], MI[k, COUNT]
+    if count < 2:
+        return update_contact(R, I, first, p)
+    change = 0.0
+    for c in range(first, first + count):
+        p, d = update_normal(R, c, p)
+        if not d < change:
+            change = d
+    p, d = update_anchor(R, M, k, first, count, MI[k, M_SLIDING] != 0, p)
+    return p, (d if not d < change else change)
+
+
 @njit(cache=True)
 def update_manifold(R, I, M, MI, k, vel, omega):
-    """One update of manifold k: a single point as one contact; two or more,
-    their normal rows, then their friction anchor (manifold_friction.py).
-    Its two bodies' velocities are loaded once and stored once
-    (pair_velocity.py). Returns its largest impulse change (NaN if any
-    change is NaN)."""
-    first, count = MI[k, FIRST], MI[k, COUNT]
+    """manifold_update with its two bodies' velocities loaded once from
+    vel, omega and stored once. Returns its largest impulse change."""
+    first = MI[k, FIRST]
     a, b = I[first, BODY_A], I[first, BODY_B]
-    p = load_pair(vel, omega, a, b)
-    if count < 2:
-        p, change = update_contact(R, I, first, p)
-    else:
-        change = 0.0
-        for c in range(first, first + count):
-            p, d = update_normal(R, c, p)
-            if not d < change:
-                change = d
-        p, d = update_anchor(R, M, k, first, count, MI[k, M_SLIDING] != 0, p)
-        change = d if not d < change else change
+    p, change = manifold_update(R, I, M, MI, k, load_pair(vel, omega, a, b))
     store_pair(vel, omega, a, b, p)
     return change
 

@@ -52,7 +52,8 @@ from .contact_layout import ARM_A, ARM_B, BODY_A, BODY_B, INV_MASS_A, INV_MASS_B
 from .manifold_friction import COUNT, FIRST, IMA, IMB, M_LAM, TA, TB, _invert
 from .resting_block import MANIFOLDS, WS_SHAPE, settle_resting
 from .scratch import take, take_bools, take_int_rows, take_ints, take_rows
-from .sequential_impulses import update_manifold
+from .pair_velocity import load_pair, store_pair
+from .sequential_impulses import manifold_update
 
 UNREACHED = np.int64(1) << 40
 # A layer's sweeps have stalled when a sweep's change is above this fraction
@@ -217,30 +218,29 @@ def _lever(R, first, count):
     return lever
 
 
-@njit(cache=True)
-def _point_change(vel, omega, i, before, o, lever):
-    """Largest change of body i's contact-point velocity since before[o:o + 6]
-    (v, ω), m/s."""
+@njit(cache=True, inline="always")
+def _point_change(p0, p, o, lever):
+    """Largest change of one body's contact-point velocity between pair
+    velocities p0 and p (pair_velocity.py; o = 0: body a, 6: body b), m/s."""
     dv = dw = 0.0
     for j in range(3):
-        dv = max(dv, abs(vel[i, j] - before[o + j]))
-        dw = max(dw, abs(omega[i, j] - before[o + 3 + j]))
+        dv = max(dv, abs(p[o + j] - p0[o + j]))
+        dw = max(dw, abs(p[o + 3 + j] - p0[o + 3 + j]))
     return dv + dw * lever
 
 
 @njit(cache=True, inline="always")
-def _update(R1, I1, M1, MI1, m, vel, omega, lever, tolerance, moved, clock, before):
+def _update(R1, I1, M1, MI1, m, vel, omega, lever, tolerance, moved, clock):
     """One update of manifold m; returns the largest change of a contact-point
     velocity of its bodies it made (m/s). A body whose change reaches
     `tolerance` is marked moved in sweep `clock`."""
     first = MI1[m, FIRST]
     a, b = I1[first, BODY_A], I1[first, BODY_B]
-    for i in range(3):
-        before[i], before[3 + i] = vel[a, i], omega[a, i]
-        before[6 + i], before[9 + i] = vel[b, i], omega[b, i]
-    update_manifold(R1, I1, M1, MI1, m, vel, omega)
-    da = _point_change(vel, omega, a, before, 0, lever)
-    db = _point_change(vel, omega, b, before, 6, lever)
+    p0 = load_pair(vel, omega, a, b)
+    p, _ = manifold_update(R1, I1, M1, MI1, m, p0)
+    store_pair(vel, omega, a, b, p)
+    da = _point_change(p0, p, 0, lever)
+    db = _point_change(p0, p, 6, lever)
     if da >= tolerance:
         moved[a] = clock
     if db >= tolerance:
@@ -249,7 +249,7 @@ def _update(R1, I1, M1, MI1, m, vel, omega, lever, tolerance, moved, clock, befo
 
 
 @njit(cache=True)
-def _sweep(one_sided, start, stop, vel, omega, levers, tolerance, moved, clock, every, before):
+def _sweep(one_sided, start, stop, vel, omega, levers, tolerance, moved, clock, every):
     """One sweep (number `clock`) over manifolds start..stop: all of them if
     `every`, else those with a body that moved in the sweep before or this
     one. Returns the largest contact-point velocity change (m/s)."""
@@ -259,7 +259,7 @@ def _sweep(one_sided, start, stop, vel, omega, levers, tolerance, moved, clock, 
         a, b = I1[MI1[m, FIRST], BODY_A], I1[MI1[m, FIRST], BODY_B]
         if every or moved[a] >= clock - 1 or moved[b] >= clock - 1:
             change = max(change, _update(R1, I1, M1, MI1, m, vel, omega, levers[m - start],
-                                         tolerance, moved, clock, before))
+                                         tolerance, moved, clock))
     return change
 
 
@@ -282,12 +282,11 @@ def _settle(one_sided, start, stop, vel, omega, passes, tolerance, moved, clock,
     levers = take(store, stop - start)
     for m in range(start, stop):
         levers[m - start] = _lever(R1, MI1[m, FIRST], MI1[m, COUNT])
-    before = take(store, 12)
     last = earlier = math.inf
     for p in range(passes):
         clock += 1
         change = _sweep(one_sided, start, stop, vel, omega, levers, tolerance, moved, clock,
-                        every and p == 0, before)
+                        every and p == 0)
         if tolerance > 0.0 and change < tolerance:
             break
         if change > STALL * earlier:
