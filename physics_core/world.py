@@ -41,7 +41,7 @@ from .isolation import freeze_rows, frozen_model
 from .integration import (EFFECT_NAMES, INTEGRATOR_CODES, N_EFFECTS, can_make_torque, forces,
                           integration_data, integration_profile, integration_work)
 from .state import State
-from .step_inputs import inputs_key, pack
+from .step_inputs import compiled_entry, inputs_key, pack
 from .step_loop import FAILED_INTEGRATE, FINITE, FORCES, INTEGRATE, no_contacts, run_steps
 from .world_commands import CommandsMixin
 from .world_reading import ReadingMixin
@@ -62,7 +62,7 @@ class World(CommandsMixin, ReadingMixin):
     def _build(self, model):
         """Everything the step derives from the model (again after add/remove_body)."""
         self.model = model
-        self._packed = None           # (inputs_key, StepInputs): packed at the next step
+        self._packed = None           # (inputs_key, StepInputs, entry): packed at the next step
         self.spring_substeps = stable_substeps(model, model.dt)
         self.substeps = max(model.substeps, self.spring_substeps)
         self.isotropic = isotropic_rows(model.inertia)   # free rotation is exact for these
@@ -126,23 +126,32 @@ class World(CommandsMixin, ReadingMixin):
         flags[0], flags[1] = s.has_user_force, s.has_user_torque
         if self._code == ADAPTIVE:
             clear_call(self._adaptive[2])
-        return run_steps(self._inputs(), n, self.substeps, self.model.dt, self._code)
+        packed = self._packed
+        if packed is None or packed[0] != inputs_key(s):
+            packed = self._pack()
+        return packed[2](packed[1], n, int(self.substeps), float(self.model.dt), self._code)
 
     def _inputs(self):
         """The step loop's inputs (step_inputs.py), packed again only when an
         array in them was replaced since the last step."""
+        packed = self._packed
+        if packed is None or packed[0] != inputs_key(self.state):
+            packed = self._pack()
+        return packed[1]
+
+    def _pack(self):
+        """(inputs_key, StepInputs, the compiled run_steps for them: step_inputs.compiled_entry)."""
         s, cs = self.state, self.contact_system
-        key = inputs_key(s)
-        if self._packed is None or self._packed[0] != key:
-            contacts, (warm_keys, warm_values), (ints, floats, counts), scratch = (
-                cs.args() if cs is not None else _NO_CONTACTS)
-            self._packed = (key, pack(
-                self._idata, (s.pos, s.quat, s.vel, s.omega, s.awake),
-                (s.user_force, s.user_force_offset, s.user_torque, self._flags),
-                (self._inv_mass, self.inertia, self.inv_inertia), self._work, contacts,
-                warm_keys, warm_values, ints, floats, counts, scratch, self._adaptive,
-                self._cycles))
-        return self._packed[1]
+        contacts, (warm_keys, warm_values), (ints, floats, counts), scratch = (
+            cs.args() if cs is not None else _NO_CONTACTS)
+        inputs = pack(self._idata, (s.pos, s.quat, s.vel, s.omega, s.awake),
+                      (s.user_force, s.user_force_offset, s.user_torque, self._flags),
+                      (self._inv_mass, self.inertia, self.inv_inertia), self._work, contacts,
+                      warm_keys, warm_values, ints, floats, counts, scratch, self._adaptive,
+                      self._cycles)
+        entry = compiled_entry(run_steps, (inputs, 1, 1, 1.0, self._code))
+        self._packed = (inputs_key(s), inputs, entry)
+        return self._packed
 
     def _seconds(self, cycles, steps=1):
         """{stage: seconds} from step_loop's prof slots (divided by `steps`)."""
