@@ -414,19 +414,13 @@ def _behind(data, by_size, ratio):
         sprof = small.get("stage_seconds_per_step") or {}
         stotal = small["seconds"] / small["steps"]
         stop = sorted(sprof.items(), key=lambda kv: -kv[1])[:2]
-        why = (f" Why: with {small['bodies']} body a step already costs "
+        why = (f" Where the step time goes: with {small['bodies']} body a step costs "
                f"{md.seconds(stotal)} ("
                + " and ".join(f"{k} {100 * v / stotal:.0f} %" for k, v in stop)
-               + "): the contact stages are sequences of numpy calls, each with a fixed "
-               "overhead of microseconds however few rows it works on, where a compiled engine "
-               f"spends microseconds on the whole step. At {big['bodies']} bodies the time "
-               "goes to " + " and ".join(f"{k} ({100 * v / total:.0f} %)" for k, v in top)
-               + ": array passes over every contact, repeated for each solver iteration and "
-               "each colour batch of the Gauss–Seidel solve, where PyBullet and MuJoCo run "
-               "compiled loops; the gap narrows as the arrays grow and numpy's per-call "
-               "overhead is spread over more rows.")
-    return ("Where this engine is behind (times faster than this engine, per number of "
-            "bodies): " + "; ".join(parts) + "." + why)
+               + f"); at {big['bodies']} bodies {md.seconds(total)} ("
+               + " and ".join(f"{k} {100 * v / total:.0f} %" for k, v in top) + ").")
+    return ("Against the others, per number of bodies (how many times faster than this "
+            "engine each is, or this engine's lead): " + "; ".join(parts) + "." + why)
 
 
 def _pile_behind(rows):
