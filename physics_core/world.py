@@ -126,21 +126,20 @@ class World(CommandsMixin, ReadingMixin):
         flags[0], flags[1] = s.has_user_force, s.has_user_torque
         if self._code == ADAPTIVE:
             clear_call(self._adaptive[2])
-        packed = self._packed
-        if packed is None or packed[0] != inputs_key(s):
-            packed = self._pack()
-        return packed[2](packed[1], n, int(self.substeps), float(self.model.dt), self._code)
+        _, inputs, entry = self._current_inputs()
+        return entry(inputs, n, int(self.substeps), float(self.model.dt), self._code)
 
     def _inputs(self):
-        """The step loop's inputs (step_inputs.py), packed again only when an
-        array in them was replaced since the last step."""
-        packed = self._packed
-        if packed is None or packed[0] != inputs_key(self.state):
-            packed = self._pack()
-        return packed[1]
+        """The step loop's inputs (step_inputs.py)."""
+        return self._current_inputs()[1]
 
-    def _pack(self):
-        """(inputs_key, StepInputs, the compiled run_steps for them: step_inputs.compiled_entry)."""
+    def _current_inputs(self):
+        """(inputs_key, StepInputs, the compiled run_steps for them:
+        step_inputs.compiled_entry), packed again only when an array in
+        them was replaced since the last step."""
+        packed = self._packed
+        if packed is not None and packed[0] == inputs_key(self.state):
+            return packed
         s, cs = self.state, self.contact_system
         contacts, (warm_keys, warm_values), (ints, floats, counts), scratch = (
             cs.args() if cs is not None else _NO_CONTACTS)

@@ -15,8 +15,7 @@ from physics_core.collision import contact_stages as CS
 from physics_core.collision import shock_propagation as SP
 from physics_core.collision.contact_build import row_velocity
 from physics_core.collision.contact_layout import BIAS, LAM
-from physics_core.collision.manifold_friction import (COUNT, FIRST, M_LAM, M_MU_S, RADIUS,
-                                                      anchor_velocity)
+from physics_core.collision.manifold_friction import COUNT, FIRST, M_LAM, M_MU_S, RADIUS
 from physics_core.collision.resting_block import WS_SHAPE, settle_resting
 from physics_core.collision.scratch import CURSOR, new_counts
 from physics_core.collision.sequential_impulses import solve_velocities
@@ -83,7 +82,7 @@ def test_a_cube_on_the_floor_is_settled_with_every_row_met():
         assert abs(row_velocity(R1, c, 0, a, b, vel, omega) - R1[c, BIAS]) < 1e-12
         assert R1[c, LAM] >= 0.0
     for r in range(3):
-        assert abs(anchor_velocity(M1, 0, r, a, b, vel, omega)) < 1e-12
+        assert abs(row_velocity(M1, 0, r, a, b, vel, omega)) < 1e-12   # the rows' layout
     # resting on the floor: no velocity is left at all (COURSE.md 5, resting contact)
     assert np.abs(vel[1]).max() < 1e-12 and np.abs(omega[1]).max() < 1e-12
     ln = R1[first:first + count, LAM].sum()

@@ -32,7 +32,7 @@ from .contact_build import start_separation, touch_shift
 from .kinetic_bound import kinetic_bound
 from .contact_layout import (ARM_A, ARM_B, BODY_A, BODY_B, DEPTH, DIR, INV_MASS_A, INV_MASS_B, LAM,
                              MU_K, MU_S, SLIDING, TURN_A, TURN_B, U0)
-from .pair_velocity import pair_impulse, pair_velocity
+from .pair_velocity import load_pair, pair_impulse, pair_velocity, store_pair
 from .scratch import take, take_int_rows, take_rows
 
 # float columns: per row r (3): linear direction L, angular parts for a and b,
@@ -191,33 +191,17 @@ def _take_row_friction(R, M, k, first, count):
 
 
 @njit(cache=True)
-def anchor_velocity(M, k, r, a, b, vel, omega):
-    u = 0.0
-    for i in range(3):
-        u += (M[k, L + 3 * r + i] * (vel[b, i] - vel[a, i])
-              + M[k, AB + 3 * r + i] * omega[b, i] - M[k, AA + 3 * r + i] * omega[a, i])
-    return u
-
-
-@njit(cache=True)
-def anchor_impulse(M, k, r, lam, a, b, vel, omega):
-    ima, imb = M[k, IMA] * lam, M[k, IMB] * lam
-    for i in range(3):
-        d = M[k, L + 3 * r + i]
-        vel[a, i] -= ima * d
-        omega[a, i] -= lam * M[k, TA + 3 * r + i]
-        vel[b, i] += imb * d
-        omega[b, i] += lam * M[k, TB + 3 * r + i]
-
-
-@njit(cache=True)
 def anchor_warm_start(M, MI, I, vel, omega):
+    """The anchors' warm-started tangential impulses applied (the table has
+    the rows' column layout: pair_velocity.py, as for the rows)."""
     for k in range(len(MI)):
         if MI[k, COUNT] >= 2:
             a, b = I[MI[k, FIRST], BODY_A], I[MI[k, FIRST], BODY_B]
+            p = load_pair(vel, omega, a, b)
             for r in range(2):
                 if M[k, M_LAM + r] != 0.0:
-                    anchor_impulse(M, k, r, M[k, M_LAM + r], a, b, vel, omega)
+                    p = pair_impulse(M, k, r, M[k, M_LAM + r], p)
+            store_pair(vel, omega, a, b, p)
 
 
 @njit(cache=True, inline="always")

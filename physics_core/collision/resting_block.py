@@ -36,8 +36,7 @@ from numba import njit
 from ..quaternion import rotate_inverse_one, rotate_one, row4
 from .contact_build import row_velocity
 from .contact_layout import ARM_A, ARM_B, BIAS, BODY_A, BODY_B, DIR, INV_MASS_A, INV_MASS_B, LAM
-from .manifold_friction import (AA, AB, COUNT, FIRST, L, M_LAM, M_MU_S, M_SLIDING, RADIUS,
-                                anchor_velocity)
+from .manifold_friction import AA, AB, COUNT, FIRST, L, M_LAM, M_MU_S, M_SLIDING, RADIUS
 from .pair_velocity import load_pair, pair_impulse, store_pair
 
 MANIFOLDS = 4         # a body's manifolds solved together at most
@@ -68,7 +67,7 @@ def _manifold_rows(R1, I1, M1, MI1, m, vel, omega, upper_is_b, ws, j):
         for i in range(3):
             ws[j, i] = sign * M1[m, L + 3 * r + i]
             ws[j, 3 + i] = sign * M1[m, anchor_arm + 3 * r + i]
-        ws[VEC, j] = -anchor_velocity(M1, m, r, a, b, vel, omega)
+        ws[VEC, j] = -row_velocity(M1, m, r, a, b, vel, omega)    # the rows' layout
         j += 1
     return j
 
