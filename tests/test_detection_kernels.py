@@ -255,6 +255,26 @@ def test_grid_pairs_are_the_numpy_broad_phase_pairs(seed, n, spread, margin, n_p
     assert_same_contacts(model, pos, quat, margin)
 
 
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2 ** 32 - 1), clusters=st.integers(2, 6), per=st.integers(2, 30),
+       margin=st.sampled_from([0.0, 0.01, 0.2]))
+def test_dense_clusters_far_apart_give_the_numpy_pairs(seed, clusters, per, margin):
+    """Clusters of touching bodies kilometres apart: the grid indexes its
+    occupied cells by sorted key (more than DENSE_CELLS_PER_BODY cells per
+    body), and each body's neighbour cells are searched as runs of keys
+    (grid.forward_spans); the pairs are the numpy broad phase's, in order."""
+    rng = np.random.default_rng(seed)
+    n = clusters * per
+    model, _, quat = mixed_scene(rng, n + 1, 0.3, 1, 0.0)
+    centres = rng.uniform(-5e3, 5e3, (clusters, 3))
+    pos = np.concatenate([[[0.0, 0.0, 0.0]], np.repeat(centres, per, axis=0)
+                          + rng.uniform(-0.4, 0.4, (n, 3))])
+    g = Geometry.from_model(model)
+    pairs = candidate_pairs(g.kind, g.dims, g.is_static, g.reach, pos, quat, margin)
+    a, b = numpy_pairs(model, pos, quat, margin)
+    assert np.array_equal(pairs[:, 0], a) and np.array_equal(pairs[:, 1], b)
+
+
 # ---- signed depth (for a continuous-collision search) ----------------------------------
 
 @settings(max_examples=60, deadline=None)

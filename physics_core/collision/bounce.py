@@ -38,6 +38,8 @@ from .contact_layout import (BODY_A, BODY_B, DEPTH, DIR, E, LAM, MASS_N, MU_K, M
                              W_TT_INV)
 from .sequential_impulses import apply_impulse
 
+WHEN, SHIFT, AFTER = range(3)      # columns of impact_terms' table
+
 
 @njit(cache=True)
 def effective_restitution(e, approach, threshold, ramp):
@@ -87,28 +89,36 @@ def bounce_friction(R, c, a, b, jn, vel, omega):
     return s1, s2
 
 
-@njit(cache=True, inline="always")
-def bounce_contact(R, I, c, threshold, ramp, h, w, vel, omega, vel_start, omega_start, target,
-                   tau, J):
-    """The pairwise bounce of contact c if it approaches and meets; True if it
-    bounced. Its first bounce of the substep happens at the impact: the
-    approach speed is the one at τ (`impact`), and the forces' change of
-    u_n after τ is added to the separation speed C_R × approach (the body
-    keeps falling for the rest of the substep, not bouncing off a speed
-    gravity gave it after the impact)."""
-    a, b = I[c, BODY_A], I[c, BODY_B]
-    u_now = row_velocity(R, c, 0, a, b, vel, omega)
-    after, when = 0.0, 1.0           # the forces' change of u_n after the impact, τ
-    shift = 0.0                      # physical u_n minus the integrator's (see below)
-    if target[c] == 0.0 and J[c, 0] == 0.0:
+@njit(cache=True)
+def impact_terms(R, I, vel_start, omega_start, h, w, onset):
+    """onset[c] = (τ, shift, after) of contact c's first bounce, the same
+    for every sweep of the pass: its impact happens at τ (`impact`), and the
+    forces' change of u_n after τ (`after`) is added to the separation
+    speed C_R × approach (the body keeps falling for the rest of the
+    substep, not bouncing off a speed gravity gave it after the impact).
+    `shift` is the physical u_n minus the integrator's: the integrators'
+    velocities are staggered by (w − ½) h against the positions
+    (semi-implicit Euler's is leapfrog's half-step velocity), so the
+    physical one at a step boundary is u + (w − ½) a h, w = END_WEIGHT."""
+    for c in range(len(R)):
         u0 = R[c, U0]                # u_n the integrator gave, before any impulse
-        u_s = row_velocity(R, c, 0, a, b, vel_start, omega_start)
-        # the integrators' velocities are staggered by (w − ½) h against the
-        # positions (semi-implicit Euler's is leapfrog's half-step velocity):
-        # the physical one at a step boundary is u + (w − ½) a h, w = END_WEIGHT
+        u_s = row_velocity(R, c, 0, I[c, BODY_A], I[c, BODY_B], vel_start, omega_start)
         shift = (w - 0.5) * (u0 - u_s)
         u_at, when = impact(u_s + shift, u0 + shift, R[c, DEPTH], h)
-        after = u0 + shift - u_at
+        onset[c, WHEN], onset[c, SHIFT], onset[c, AFTER] = when, shift, u0 + shift - u_at
+
+
+@njit(cache=True, inline="always")
+def bounce_contact(R, I, c, threshold, ramp, h, vel, omega, onset, target, tau, J):
+    """The pairwise bounce of contact c if it approaches and meets; True if it
+    bounced. Its first bounce of the substep happens at the impact, with
+    the approach speed at τ (impact_terms); a later one is a plain
+    pairwise collision."""
+    a, b = I[c, BODY_A], I[c, BODY_B]
+    u_now = row_velocity(R, c, 0, a, b, vel, omega)
+    after, when, shift = 0.0, 1.0, 0.0
+    if target[c] == 0.0 and J[c, 0] == 0.0:
+        after, when, shift = onset[c, AFTER], onset[c, WHEN], onset[c, SHIFT]
     u_imp = u_now + shift - after    # physical, at the impact, with the impulses so far
     approach = -u_imp
     if not (approach > threshold and approach * h > -R[c, DEPTH]):
@@ -132,22 +142,24 @@ def bounce_contact(R, I, c, threshold, ramp, h, w, vel, omega, vel_start, omega_
 
 @njit(cache=True)
 def collision_pass(R, I, vel, omega, vel_start, omega_start, threshold, ramp, h, w, sweeps,
-                   target, tau, J):
+                   target, tau, J, onset):
     """Sweeps of pairwise bounces until none bounces (at most `sweeps`).
     target[c] = C_R × approach of contact c's first bounce (0: it did not
     bounce elastically), tau[c] its impact fraction (1 when none), J (k, 3)
     the impulses applied; vel_start, omega_start: the velocities at the
-    start of the substep. Returns the number of bounces."""
+    start of the substep; onset (k, 3): scratch for impact_terms. Returns
+    the number of bounces."""
     for c in range(len(R)):
         target[c] = 0.0
         tau[c] = 1.0
         J[c, 0] = J[c, 1] = J[c, 2] = 0.0
+    impact_terms(R, I, vel_start, omega_start, h, w, onset)
     count = 0
     for sweep in range(sweeps):
         bounced = 0
         for c in range(len(R)):
-            bounced += bounce_contact(R, I, c, threshold, ramp, h, w, vel, omega, vel_start,
-                                      omega_start, target, tau, J)
+            bounced += bounce_contact(R, I, c, threshold, ramp, h, vel, omega, onset, target,
+                                      tau, J)
         count += bounced
         if bounced == 0:
             break

