@@ -126,10 +126,11 @@ def manifold_update(R, I, M, MI, k, p):
     return p, (d if not d < change else change)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def update_manifold(R, I, M, MI, k, vel, omega):
     """manifold_update with its two bodies' velocities loaded once from
-    vel, omega and stored once. Returns its largest impulse change."""
+    vel, omega and stored once. Returns its largest impulse change. Inlined
+    in the sweep: a call passes seven arrays, field by field, per manifold."""
     first = MI[k, FIRST]
     a, b = I[first, BODY_A], I[first, BODY_B]
     p, change = manifold_update(R, I, M, MI, k, load_pair(vel, omega, a, b))
