@@ -94,6 +94,12 @@ def coupling(R, c, r, s):
 
 
 @njit(cache=True, inline="always")
+def normal_mass(R, c):
+    """1/W_nn, the normal row's effective mass (COURSE.md 5's denominator)."""
+    return 1.0 / max(coupling(R, c, 0, 0), _TINY)
+
+
+@njit(cache=True, inline="always")
 def effective_masses(R, c):
     """1/W_nn, the tangent block and its inverse, and W_tt⁻¹ W_tn."""
     k_a = R[c, INV_MASS_A]
@@ -102,7 +108,7 @@ def effective_masses(R, c):
         k_a += R[c, ARM_A + i] * R[c, TURN_A + i]
         k_b += R[c, ARM_B + i] * R[c, TURN_B + i]
     R[c, K_A], R[c, K_B] = k_a, k_b
-    R[c, MASS_N] = 1.0 / max(coupling(R, c, 0, 0), _TINY)
+    R[c, MASS_N] = normal_mass(R, c)
     w11, w12 = coupling(R, c, 1, 1), coupling(R, c, 1, 2)
     w21, w22 = coupling(R, c, 2, 1), coupling(R, c, 2, 2)
     det = w11 * w22 - w12 * w21

@@ -47,8 +47,9 @@ import numpy as np
 from numba import njit
 
 from ..quaternion import rotate_inverse_one, row4
-from .contact_build import effective_masses
-from .contact_layout import ARM_A, ARM_B, BODY_A, BODY_B, INV_MASS_A, INV_MASS_B, LAM, TURN_A, TURN_B
+from .contact_build import effective_masses, normal_mass
+from .contact_layout import (ARM_A, ARM_B, BODY_A, BODY_B, INV_MASS_A, INV_MASS_B, LAM, MASS_N,
+                             TURN_A, TURN_B)
 from .manifold_friction import COUNT, FIRST, IMA, IMB, M_LAM, TA, TB, _invert
 from .resting_block import MANIFOLDS, WS_SHAPE, settle_resting
 from .scratch import take, take_bools, take_int_rows, take_ints, take_rows
@@ -123,20 +124,48 @@ def support_layers(R, I, n, store):
     return layer
 
 
+@njit(cache=True, inline="always")
+def _plus_zero(x):
+    return x == 0.0 and math.copysign(1.0, x) > 0.0
+
+
 @njit(cache=True)
-def _freeze_row(R, c, side):
-    """Row c with body `side` (0: a, 1: b) immovable: no impulse reaches it."""
-    R[c, INV_MASS_A if side == 0 else INV_MASS_B] = 0.0
-    turn = TURN_A if side == 0 else TURN_B
+def _held(T, k, inv_mass, turn):
+    """Whether entry k of a row table has that side immovable already: its
+    inverse mass and the nine I_w⁻¹ (r × d_r) all exactly +0.0, as freezing
+    writes them (a static or sleeping body, the ground under a pile), so that
+    freezing it again would change no number of the entry."""
+    if not _plus_zero(T[k, inv_mass]):
+        return False
+    for i in range(9):
+        if not _plus_zero(T[k, turn + i]):
+            return False
+    return True
+
+
+@njit(cache=True)
+def _freeze_row(R, c, side, anchored):
+    """Row c with body `side` (0: a, 1: b) immovable: no impulse reaches it.
+    The row of an anchored manifold (its friction is the anchor's) gets its
+    normal's effective mass anew, the only one of its masses the sweeps read."""
+    inv_mass, turn = (INV_MASS_A, TURN_A) if side == 0 else (INV_MASS_B, TURN_B)
+    if _held(R, c, inv_mass, turn):
+        return
+    R[c, inv_mass] = 0.0
     for i in range(9):
         R[c, turn + i] = 0.0
-    effective_masses(R, c)
+    if anchored:
+        R[c, MASS_N] = normal_mass(R, c)
+    else:
+        effective_masses(R, c)
 
 
 @njit(cache=True)
 def _freeze_anchor(M, k, side, w):
-    M[k, IMA if side == 0 else IMB] = 0.0
-    turn = TA if side == 0 else TB
+    inv_mass, turn = (IMA, TA) if side == 0 else (IMB, TB)
+    if _held(M, k, inv_mass, turn):
+        return
+    M[k, inv_mass] = 0.0
     for i in range(9):
         M[k, turn + i] = 0.0
     _invert(M, k, w)
@@ -161,7 +190,7 @@ def _one_sided(R, I, M, MI, layer, order, store):
         side = 0 if layer[I[first, BODY_A]] < layer[I[first, BODY_B]] else 1
         for c in range(first, first + count):
             R1[r], I1[r] = R[c], I[c]
-            _freeze_row(R1, r, side)
+            _freeze_row(R1, r, side, count >= 2)
             r += 1
         if count >= 2:
             _freeze_anchor(M1, m, side, w)
