@@ -2,7 +2,7 @@
 
     physics-bench accuracy  [--quick] [--out DIR]   integrators × dt × substeps, contacts
     physics-bench stability [--quick] [--out DIR]   hard cases, stiff spring, long runs, random scenes
-    physics-bench scale     [--quick] [--out DIR]   sphere and box piles and the pyramid beside PyBullet and MuJoCo
+    physics-bench scale     [--quick] [--repeat R] [--out DIR]   sphere and box piles and the pyramid beside PyBullet and MuJoCo
     physics-bench effects   [--quick] [--out DIR]   per-effect cost table
     physics-bench node      [--quick] [--out DIR]   ROS 2 node in real time: step, publish, recording cost
     physics-bench crosscheck [--quick] [--out DIR]  closed-form scenes beside PyBullet and MuJoCo
@@ -42,7 +42,7 @@ def _run_stability(args):
 
 def _run_scale(args):
     from . import scale
-    scale.run(quick=args.quick, out=args.out)
+    scale.run(quick=args.quick, out=args.out, repeat=getattr(args, "repeat", 1))
 
 
 def _run_effects(args):
@@ -107,6 +107,10 @@ def parser():
         s.add_argument("--quick", action="store_true",
                        help="CI-sized run: fewer step sizes, shorter runs, fewer bodies")
         s.add_argument("--out", default=DEFAULT_OUT, help="output folder (default: %(default)s)")
+        if name == "scale":
+            s.add_argument("--repeat", type=int, default=1, metavar="R",
+                           help="make every measurement R times, engines in turn, and keep "
+                                "each engine's fastest run (default: %(default)s)")
         if name in ("accuracy", "all"):
             s.add_argument("--only", nargs="+", metavar="PROBLEM",
                            help="accuracy problems to run (harmonic damped drag_fall kepler "
