@@ -69,7 +69,10 @@ def _start(body, store):
     return _copy(store, body[0]), _copy(store, body[1]), _copy(store, body[2]), _copy(store, body[3])
 
 
-@njit(cache=True)
+# Inlined in the loop over steps (_run), with the contact stages inlined in
+# it: one compiled function per world.step(n) call, so the packed inputs are
+# unpacked once per call, not passed down once per step and substep.
+@njit(cache=True, inline="always")
 def _one_step(substeps, dt, code, idata, body, loads, masses, work, contacts, adaptive, prof):
     """One step; -1 or the failed stage."""
     cm, fp, ip, sleep, warm, events, cap, scratch = contacts
