@@ -144,16 +144,25 @@ def _held(T, k, inv_mass, turn):
 
 
 @njit(cache=True)
+def _make_immovable(T, k, inv_mass, turn):
+    """Entry k's side (its inverse-mass column, its nine turn columns) set to
+    +0.0; False, with nothing written, when it was so already (_held)."""
+    if _held(T, k, inv_mass, turn):
+        return False
+    T[k, inv_mass] = 0.0
+    for i in range(9):
+        T[k, turn + i] = 0.0
+    return True
+
+
+@njit(cache=True)
 def _freeze_row(R, c, side, anchored):
     """Row c with body `side` (0: a, 1: b) immovable: no impulse reaches it.
     The row of an anchored manifold (its friction is the anchor's) gets its
     normal's effective mass anew, the only one of its masses the sweeps read."""
     inv_mass, turn = (INV_MASS_A, TURN_A) if side == 0 else (INV_MASS_B, TURN_B)
-    if _held(R, c, inv_mass, turn):
+    if not _make_immovable(R, c, inv_mass, turn):
         return
-    R[c, inv_mass] = 0.0
-    for i in range(9):
-        R[c, turn + i] = 0.0
     if anchored:
         R[c, MASS_N] = normal_mass(R, c)
     else:
@@ -163,12 +172,8 @@ def _freeze_row(R, c, side, anchored):
 @njit(cache=True)
 def _freeze_anchor(M, k, side, w):
     inv_mass, turn = (IMA, TA) if side == 0 else (IMB, TB)
-    if _held(M, k, inv_mass, turn):
-        return
-    M[k, inv_mass] = 0.0
-    for i in range(9):
-        M[k, turn + i] = 0.0
-    _invert(M, k, w)
+    if _make_immovable(M, k, inv_mass, turn):
+        _invert(M, k, w)
 
 
 @njit(cache=True)
