@@ -84,7 +84,7 @@ def fresh_process_study(label, module, sizes, steps, repeat=1):
     rows = []
     for n in sizes:
         kept = {}
-        for round_ in range(repeat):
+        for _ in range(repeat):
             for engine in engines.ENGINES:
                 r = _measure_one(label, module, n, engine, steps(n), prog)
                 _keep_fastest(kept, engine, r)
@@ -108,8 +108,8 @@ def _measure_one(label, module, n, engine, steps, prog):
 def _keep_fastest(kept, engine, r):
     """kept[engine]: the fastest run so far, every round's steps/s (None: failed) in its "rounds"."""
     rate = r.get("steps_per_second") if "error" not in r else None
-    rounds = kept[engine]["rounds"] if engine in kept else []
     best = kept.get(engine)
+    rounds = best["rounds"] if best else []
     if best is None or (rate is not None and rate > (best.get("steps_per_second") or 0.0)):
         best = r
     kept[engine] = dict(best, rounds=rounds + [rate])
