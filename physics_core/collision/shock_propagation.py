@@ -70,7 +70,6 @@ STALL = 0.9
 # 300-box pyramid that were thrown off gained 2.5 % (median), 9 % (90th
 # percentile), 69 % at most, per substep
 GAIN = 1e-4
-SMALL_SORT = 32         # up to this many manifolds, _stable_order sorts by insertion
 
 
 @njit(cache=True)
@@ -207,36 +206,39 @@ def _upward_order(I, MI, layer, store):
     """(order, top): the manifolds between two layers (touching something
     immovable), by (higher layer, lower layer), key order within (a stable
     sort: deterministic), and the higher layer of each."""
-    rank = take_ints(store, len(MI))
-    top = take_ints(store, len(MI))
+    top, lo = take_ints(store, len(MI)), take_ints(store, len(MI))
+    between = take_ints(store, len(MI))
+    m = 0
     for k in range(len(MI)):
         la, lb = layer[I[MI[k, FIRST], BODY_A]], layer[I[MI[k, FIRST], BODY_B]]
-        top[k], lo = max(la, lb), min(la, lb)
-        rank[k] = UNREACHED if (lo == UNREACHED or lo == top[k]) else top[k] * (len(layer) + 1) + lo
-    order = _stable_order(rank, store)
-    m = 0
-    while m < len(order) and rank[order[m]] != UNREACHED:
-        m += 1
+        top[k], lo[k] = max(la, lb), min(la, lb)
+        if top[k] != UNREACHED and lo[k] != top[k]:      # both reached (so lo is), apart
+            between[m] = k
+            m += 1
+    # by the lower layer, then stably by the higher: (higher, lower, key order)
+    order = _counting_order(_counting_order(between[:m], lo, len(layer), store), top,
+                            len(layer), store)
     tops = take_ints(store, m)
     for s in range(m):
         tops[s] = top[order[s]]
-    return order[:m], tops
+    return order, tops
 
 
 @njit(cache=True)
-def _stable_order(rank, store):
-    """np.argsort(rank, kind="mergesort"): a stable order is unique, so a few
-    ranks are sorted by insertion in scratch instead (no allocation)."""
-    if len(rank) > SMALL_SORT:
-        return np.argsort(rank, kind="mergesort")
-    order = take_ints(store, len(rank))
-    for s in range(len(rank)):
-        t = s
-        while t > 0 and rank[order[t - 1]] > rank[s]:
-            order[t] = order[t - 1]
-            t -= 1
-        order[t] = s
-    return order
+def _counting_order(items, key, limit, store):
+    """`items` stably sorted by key[item] (0 <= key < limit; a layer is less
+    than the body count): a counting sort in scratch, O(items + limit)."""
+    start = take_ints(store, limit + 1)
+    start[:] = 0
+    for k in items:
+        start[key[k] + 1] += 1
+    for i in range(limit):
+        start[i + 1] += start[i]
+    out = take_ints(store, len(items))
+    for k in items:
+        out[start[key[k]]] = k
+        start[key[k]] += 1
+    return out
 
 
 @njit(cache=True)
