@@ -138,7 +138,7 @@ def solve_stage(fp, ip, R, I, M, MI, key, vel, omega, warm, J, masses, store):
         return take_rows(store, 0, 3), 0, take_rows(store, 0, 3)
     # an impulse change dλ moves a row's relative velocity by about dλ / m_eff
     limit = fp[VELOCITY_TOLERANCE] * least_mass(R) if fp[VELOCITY_TOLERANCE] > 0.0 else -1.0
-    sweeps = solve_velocities(R, I, M, MI, vel, omega, ip[ITERATIONS], limit)
+    sweeps, change = solve_velocities(R, I, M, MI, vel, omega, ip[ITERATIONS], limit)
     friction, slip = take_rows(store, len(R), 3), take(store, len(R))
     friction_and_slip(R, I, vel, omega, friction, slip)
     anchor_friction_out(R, M, MI, friction)
@@ -146,8 +146,15 @@ def solve_stage(fp, ip, R, I, M, MI, key, vel, omega, warm, J, masses, store):
     # each manifold settled to a hundredth of the sweeps' velocity tolerance:
     # a looser stop let the 20-stack's top creep 1.4 mm a second
     settle = 0.01 * fp[VELOCITY_TOLERANCE]
-    if ip[SHOCK_ON] and shock_sweep(R, I, M, MI, vel, omega, len(vel), ip[SHOCK_ON], settle,
-                                    masses, ip[RESTING_BLOCK] != 0, store):
+    # sweeps that ended changing no impulse by more than a hundredth of their
+    # stop (no contact-point velocity by more than `settle`) left the shock
+    # sweep nothing to remove (tests/test_shock_skip.py): it is skipped. A
+    # resting body's warm start meets this in one sweep (a resting ball's
+    # step 4.2 -> 3.1 us); a stack converging slowly never does
+    converged = change < 0.01 * limit
+    if ip[SHOCK_ON] and not converged and shock_sweep(R, I, M, MI, vel, omega, len(vel),
+                                                      ip[SHOCK_ON], settle, masses,
+                                                      ip[RESTING_BLOCK] != 0, store):
         friction_and_slip(R, I, vel, omega, friction, slip)
         anchor_friction_out(R, M, MI, friction)
     slide = kinetic_velocity_change(R, I, M, MI, len(vel), store)

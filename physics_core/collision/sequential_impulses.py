@@ -154,12 +154,14 @@ def sweep_manifolds(R, I, M, MI, vel, omega):
 def solve_velocities(R, I, M, MI, vel, omega, iterations, limit):
     """At most `iterations` sweeps over every manifold; stops after a sweep
     that changed no impulse by more than `limit` (N·s; < 0: never). A NaN
-    change never stops early. Returns the number of sweeps done."""
+    change never stops early. Returns (sweeps done, the last sweep's largest
+    impulse change; NaN if one was)."""
+    change = math.inf
     for sweep in range(iterations):
         change = sweep_manifolds(R, I, M, MI, vel, omega)
         if limit > 0.0 and change < limit:
-            return sweep + 1
-    return iterations
+            return sweep + 1, change
+    return iterations, change
 
 
 @njit(cache=True)

@@ -37,7 +37,9 @@ _settle_guarded): a body on two supports that move apart cannot follow
 both, and making it try threw the top boxes off a tall pyramid.
 
 On a converged solve the sweep changes nothing (no contact approaches or
-slips); it only removes what the sweeps left. The warm cache keeps the
+slips); it only removes what the sweeps left, so it is not run after sweeps
+whose last changed no impulse by more than a hundredth of their stop
+(contact_stages.solve_stage). The warm cache keeps the
 sweeps' own impulses (contact_stages.solve_stage), so the next substep's
 solve starts from its own converging values.
 """
