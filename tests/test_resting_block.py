@@ -17,8 +17,9 @@ from physics_core.collision.contact_build import row_velocity
 from physics_core.collision.contact_layout import BIAS, LAM
 from physics_core.collision.manifold_friction import COUNT, FIRST, M_LAM, M_MU_S, RADIUS
 from physics_core.collision.resting_block import WS_SHAPE, settle_resting
-from physics_core.collision.scratch import CURSOR, new_counts
+from physics_core.collision.scratch import CURSOR
 from physics_core.collision.sequential_impulses import solve_velocities
+from substep_rows import rows_before_solve
 
 FLOOR = {"name": "floor", "shape": {"type": "plane"}, "static": True, "material": "steel"}
 DT = 1 / 240
@@ -41,22 +42,8 @@ def world(bodies, **contacts):
 def one_sided_manifolds(w):
     """The shock sweep's inputs one substep on: the rows solved by the
     sweeps, then the layers' one-sided copies (as contact_substep builds them)."""
-    cs, s = w.contact_system, w.state
-    cm, fp, ip = cs.cm, cs.fp, cs.ip
-    store = (np.empty(1 << 18), new_counts())
-    pos, quat, vel, omega = s.pos.copy(), s.quat.copy(), s.vel.copy(), s.omega.copy()
-    moving = cm.inv_mass > 0
-    vel[:, 2] -= 9.81 * DT * moving
-    pos += vel * DT * moving[:, None]
-    a, b, point, normal, depth, key, _, _ = CS.detect_stage(cm, fp, ip, pos, quat, s.awake,
-                                                            cs.sleep, cs.cap[0], store)
-    contacts = tuple(np.array(x) for x in (a, b, point, normal, depth, key))
-    rows = CS.rows_stage(cm, fp, ip, contacts, pos, quat, vel, omega, w._inv_mass,
-                         w.inv_inertia, cs.warm, np.full(len(pos), -1.0), DT, s.vel.copy(),
-                         s.omega.copy(), store)
-    R, I, M, MI = (np.array(x) for x in rows)
-    CS.restitution_stage(fp, ip, R, I, M, MI, vel, omega, s.vel.copy(), s.omega.copy(), DT,
-                         store)
+    R, I, M, MI, vel, omega, quat, store = rows_before_solve(w, DT)
+    ip = w.contact_system.ip
     solve_velocities(R, I, M, MI, vel, omega, ip[CS.ITERATIONS], -1.0)
     store[1][CURSOR] = 0
     layer = SP.support_layers(R, I, len(vel), store)

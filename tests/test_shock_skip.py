@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 
 from physics_core import load_scene
-from physics_core.collision import contact_stages as CS
 from physics_core.collision import shock_propagation as SP
 from physics_core.collision.contact_data import RESTING_BLOCK, SHOCK_ON, VELOCITY_TOLERANCE
-from physics_core.collision.scratch import CURSOR, new_counts
+from physics_core.collision.scratch import CURSOR
 from physics_core.collision.sequential_impulses import least_mass, solve_velocities
+from substep_rows import rows_before_solve
 
 DT = 1 / 240
 FLOOR = {"name": "floor", "shape": {"type": "plane"}, "static": True}
@@ -41,23 +41,9 @@ SCENES = {
 
 def solved_rows(w):
     """One substep's rows solved by the sweeps as solve_stage runs them: (R, I,
-    M, MI, vel, omega, last change, stop, store)."""
-    cs, s = w.contact_system, w.state
-    cm, fp, ip = cs.cm, cs.fp, cs.ip
-    store = (np.empty(1 << 18), new_counts())
-    pos, quat, vel, omega = s.pos.copy(), s.quat.copy(), s.vel.copy(), s.omega.copy()
-    moving = cm.inv_mass > 0
-    vel[:, 2] -= 9.81 * DT * moving
-    pos += vel * DT * moving[:, None]
-    a, b, point, normal, depth, key, _, _ = CS.detect_stage(cm, fp, ip, pos, quat, s.awake,
-                                                            cs.sleep, cs.cap[0], store)
-    contacts = tuple(np.array(x) for x in (a, b, point, normal, depth, key))
-    rows = CS.rows_stage(cm, fp, ip, contacts, pos, quat, vel, omega, w._inv_mass,
-                         w.inv_inertia, cs.warm, np.full(len(pos), -1.0), DT, s.vel.copy(),
-                         s.omega.copy(), store)
-    R, I, M, MI = (np.array(x) for x in rows)
-    CS.restitution_stage(fp, ip, R, I, M, MI, vel, omega, s.vel.copy(), s.omega.copy(), DT,
-                         store)
+    M, MI, vel, omega, last change, stop, store, quat)."""
+    R, I, M, MI, vel, omega, quat, store = rows_before_solve(w, DT)
+    fp = w.contact_system.fp
     stop = fp[VELOCITY_TOLERANCE] * least_mass(R)
     # swept on until they meet the skip's bound (this hand-made substep is not
     # the step's own, whose warm start usually meets it in one sweep)

@@ -1,0 +1,29 @@
+"""One contact substep of a World rebuilt by hand up to the solve: gravity
+for one substep, detection, the rows and the collision pass, as
+contact_substep runs them (for tests of the solve's later passes)."""
+import numpy as np
+
+from physics_core.collision import contact_stages as CS
+from physics_core.collision.scratch import new_counts
+
+
+def rows_before_solve(w, dt, g=9.81):
+    """(R, I, M, MI, vel, omega, quat, store) of w's next substep of length
+    dt, the collision pass applied: what the sweeps start from."""
+    cs, s = w.contact_system, w.state
+    cm, fp, ip = cs.cm, cs.fp, cs.ip
+    store = (np.empty(1 << 18), new_counts())
+    pos, quat, vel, omega = s.pos.copy(), s.quat.copy(), s.vel.copy(), s.omega.copy()
+    moving = cm.inv_mass > 0
+    vel[:, 2] -= g * dt * moving
+    pos += vel * dt * moving[:, None]
+    a, b, point, normal, depth, key, _, _ = CS.detect_stage(cm, fp, ip, pos, quat, s.awake,
+                                                            cs.sleep, cs.cap[0], store)
+    contacts = tuple(np.array(x) for x in (a, b, point, normal, depth, key))
+    rows = CS.rows_stage(cm, fp, ip, contacts, pos, quat, vel, omega, w._inv_mass,
+                         w.inv_inertia, cs.warm, np.full(len(pos), -1.0), dt, s.vel.copy(),
+                         s.omega.copy(), store)
+    R, I, M, MI = (np.array(x) for x in rows)
+    CS.restitution_stage(fp, ip, R, I, M, MI, vel, omega, s.vel.copy(), s.omega.copy(), dt,
+                         store)
+    return R, I, M, MI, vel, omega, quat, store
