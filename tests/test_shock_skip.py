@@ -16,6 +16,7 @@ import pytest
 from physics_core import load_scene
 from physics_core.collision import shock_propagation as SP
 from physics_core.collision.contact_data import RESTING_BLOCK, SHOCK_ON, VELOCITY_TOLERANCE
+from physics_core.collision.contact_stages import SETTLE
 from physics_core.collision.scratch import CURSOR
 from physics_core.collision.sequential_impulses import least_mass, solve_velocities
 from substep_rows import rows_before_solve
@@ -49,7 +50,7 @@ def solved_rows(w):
     # the step's own, whose warm start usually meets it in one sweep)
     for _ in range(200):
         _, change = solve_velocities(R, I, M, MI, vel, omega, 1, stop)
-        if change < 0.01 * stop:
+        if change < SETTLE * stop:
             break
     store[1][CURSOR] = 0
     return R, I, M, MI, vel, omega, change, stop, store, quat
@@ -62,8 +63,8 @@ def test_converged_sweeps_leave_the_shock_sweep_nothing_to_do(scene):
     w.step(240)
     R, I, M, MI, vel, omega, change, stop, store, quat = solved_rows(w)
     ip, fp = w.contact_system.ip, w.contact_system.fp
-    settle = 0.01 * fp[VELOCITY_TOLERANCE]
-    assert change < 0.01 * stop, f"{scene}: the sweeps did not converge ({change:.3g} N·s)"
+    settle = SETTLE * fp[VELOCITY_TOLERANCE]
+    assert change < SETTLE * stop, f"{scene}: the sweeps did not converge ({change:.3g} N·s)"
     v, o = vel.copy(), omega.copy()
     visited = SP.shock_sweep(R, I, M, MI, v, o, len(v), ip[SHOCK_ON], settle,
                              (w._inv_mass, w.inv_inertia, quat), ip[RESTING_BLOCK] != 0, store)

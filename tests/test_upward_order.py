@@ -3,9 +3,8 @@ manifolds between two support layers, by (higher layer, lower layer), key
 order within. Made by two counting sorts; checked against the stable
 argsort of the rank higher × (n + 1) + lower it replaces, on random layers
 and contact graphs (Hypothesis), with unreached bodies and manifolds within
-one layer left out. A manifold
-with one body unreached (no breadth-first search gives one) is left out
-too, not indexed by its layer.
+one layer left out. A manifold with one body unreached (no breadth-first
+search gives one) is left out too, not indexed by its layer.
 """
 import numpy as np
 from hypothesis import given, settings

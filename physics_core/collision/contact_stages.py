@@ -30,6 +30,11 @@ from .sleep_islands import _sync, _update, _wake_touched
 from .time_of_impact import rewind_fast_bodies
 from .warm_cache import warm_clear, warm_load, warm_store
 
+# The shock sweep settles each manifold to this fraction of the sweeps'
+# velocity tolerance (a looser stop let the 20-stack's top creep 1.4 mm a
+# second), and is skipped after sweeps that met the same fraction of their stop.
+SETTLE = 0.01
+
 
 @njit(cache=True, inline="always")
 def moving_bodies(is_static, awake, store):
@@ -143,15 +148,13 @@ def solve_stage(fp, ip, R, I, M, MI, key, vel, omega, warm, J, masses, store):
     friction_and_slip(R, I, vel, omega, friction, slip)
     anchor_friction_out(R, M, MI, friction)
     warm_store(warm[0], warm[1], key, R, friction, slip)
-    # each manifold settled to a hundredth of the sweeps' velocity tolerance:
-    # a looser stop let the 20-stack's top creep 1.4 mm a second
-    settle = 0.01 * fp[VELOCITY_TOLERANCE]
-    # sweeps that ended changing no impulse by more than a hundredth of their
-    # stop (no contact-point velocity by more than `settle`) left the shock
-    # sweep nothing to remove (tests/test_shock_skip.py): it is skipped. A
-    # resting body's warm start meets this in one sweep (a resting ball's
-    # step 4.2 -> 3.1 us); a stack converging slowly never does
-    converged = change < 0.01 * limit
+    settle = SETTLE * fp[VELOCITY_TOLERANCE]
+    # sweeps that ended changing no impulse by more than SETTLE of their stop
+    # (no contact-point velocity by more than `settle`) left the shock sweep
+    # nothing to remove (tests/test_shock_skip.py): it is skipped. A resting
+    # body's warm start meets this in one sweep (a resting ball's step
+    # 4.2 -> 3.1 us); a stack converging slowly never does
+    converged = change < SETTLE * limit
     if ip[SHOCK_ON] and not converged and shock_sweep(R, I, M, MI, vel, omega, len(vel),
                                                       ip[SHOCK_ON], settle, masses,
                                                       ip[RESTING_BLOCK] != 0, store):
