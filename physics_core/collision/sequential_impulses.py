@@ -139,26 +139,30 @@ def update_manifold(R, I, M, MI, k, vel, omega):
 
 
 @njit(cache=True)
-def sweep_manifolds(R, I, M, MI, vel, omega):
+def sweep_manifolds(R, I, M, MI, vel, omega, changes):
     """One Gauss–Seidel sweep, manifold by manifold in key order
-    (`update_manifold`). Returns the largest change."""
+    (`update_manifold`), each manifold's largest change written to
+    changes[k]. Returns the largest change."""
     change = 0.0
     for k in range(len(MI)):
         d = update_manifold(R, I, M, MI, k, vel, omega)
+        changes[k] = d
         if not d < change:
             change = d
     return change
 
 
 @njit(cache=True)
-def solve_velocities(R, I, M, MI, vel, omega, iterations, limit):
+def solve_velocities(R, I, M, MI, vel, omega, iterations, limit, changes):
     """At most `iterations` sweeps over every manifold; stops after a sweep
     that changed no impulse by more than `limit` (N·s; < 0: never). A NaN
     change never stops early. Returns (sweeps done, the last sweep's largest
-    impulse change; NaN if one was)."""
+    impulse change; NaN if one was); changes[k] is manifold k's largest
+    change in that last sweep (the shock sweep leaves out what converged)."""
     change = math.inf
+    changes[:] = math.inf
     for sweep in range(iterations):
-        change = sweep_manifolds(R, I, M, MI, vel, omega)
+        change = sweep_manifolds(R, I, M, MI, vel, omega, changes)
         if limit > 0.0 and change < limit:
             return sweep + 1, change
     return iterations, change

@@ -37,9 +37,10 @@ _settle_guarded): a body on two supports that move apart cannot follow
 both, and making it try threw the top boxes off a tall pyramid.
 
 On a converged solve the sweep changes nothing (no contact approaches or
-slips); it only removes what the sweeps left, so it is not run after sweeps
-whose last changed no impulse by more than a hundredth of their stop
-(contact_stages.solve_stage). The warm cache keeps the
+slips); it only removes what the sweeps left, so a group of bodies whose
+manifolds all ended the sweeps changing no impulse by more than a
+hundredth of their stop is left out (leave_out_settled), and the sweep is
+not run when every group is (contact_stages.solve_stage). The warm cache keeps the
 sweeps' own impulses (contact_stages.solve_stage), so the next substep's
 solve starts from its own converging values.
 """
@@ -99,8 +100,9 @@ def _neighbours(I, n, store):
 
 @njit(cache=True)
 def support_layers(R, I, n, store):
-    """(n,) breadth-first layer of every body from the immovable ones (a row
-    side with zero inverse mass) over the contacts; UNREACHED elsewhere."""
+    """((n,) breadth-first layer of every body from the immovable ones (a row
+    side with zero inverse mass) over the contacts, UNREACHED elsewhere;
+    the contact graph (_neighbours))."""
     layer = take_ints(store, n)
     layer[:] = UNREACHED
     queue = take_ints(store, n)
@@ -122,7 +124,56 @@ def support_layers(R, I, n, store):
                 layer[j] = layer[i] + 1
                 queue[tail] = j
                 tail += 1
-    return layer
+    return layer, (start, other)
+
+
+@njit(cache=True, inline="always")
+def _any_unsettled(MI, unsettled):
+    changes, bound = unsettled
+    for k in range(len(MI)):
+        if not changes[k] < bound:
+            return True
+    return False
+
+
+@njit(cache=True, inline="always")
+def _reach(i, layer, active, queue, tail):
+    """Body i queued (returns the new tail) if it is movable and reached, and not yet active."""
+    if layer[i] == 0 or layer[i] == UNREACHED or active[i]:
+        return tail
+    active[i] = True
+    queue[tail] = i
+    return tail + 1
+
+
+@njit(cache=True)
+def leave_out_settled(I, MI, layer, graph, unsettled, store):
+    """Every movable body not connected, through movable bodies, to a manifold
+    whose last sweep changed an impulse by `bound` or more (unsettled =
+    (changes, bound), sequential_impulses.solve_velocities) gets layer
+    UNREACHED: the sweep leaves its group out, as it would leave out the
+    whole solve (contact_stages.solve_stage). Groups share no body, so the
+    others are swept as before. Returns the number of bodies kept."""
+    changes, bound = unsettled
+    start, other = graph
+    active = take_bools(store, len(layer))
+    active[:] = False
+    queue = take_ints(store, len(layer))
+    tail = 0
+    for k in range(len(MI)):
+        if not changes[k] < bound:
+            tail = _reach(I[MI[k, FIRST], BODY_A], layer, active, queue, tail)
+            tail = _reach(I[MI[k, FIRST], BODY_B], layer, active, queue, tail)
+    head = 0
+    while head < tail:
+        i = queue[head]
+        head += 1
+        for e in range(start[i], start[i + 1]):
+            tail = _reach(other[e], layer, active, queue, tail)
+    for i in range(len(layer)):
+        if layer[i] != 0 and not active[i]:
+            layer[i] = UNREACHED
+    return tail
 
 
 @njit(cache=True, inline="always")
@@ -465,15 +516,18 @@ def _settle_guarded(one_sided, g, e, vel, omega, passes, tolerance, moved, clock
 
 
 @njit(cache=True)
-def shock_sweep(R, I, M, MI, vel, omega, n, passes, tolerance, masses, block, store):
+def shock_sweep(R, I, M, MI, vel, omega, n, passes, tolerance, masses, block, unsettled, store):
     """The ordered one-sided sweep (module docstring), layer after layer from
     the ground up, each settled in turn (`_settle_guarded`; with `block`, a
     body resting on one support through three or more points at once,
-    resting_block.py); the rows' and anchors' λ updated in place. Returns
+    resting_block.py), over the groups of bodies the sweeps left unsettled
+    (leave_out_settled); the rows' and anchors' λ updated in place. Returns
     the number of manifolds visited."""
-    if len(MI) == 0:
+    if not _any_unsettled(MI, unsettled):
         return 0
-    layer = support_layers(R, I, n, store)
+    layer, graph = support_layers(R, I, n, store)
+    if leave_out_settled(I, MI, layer, graph, unsettled, store) == 0:
+        return 0
     order, top = _upward_order(I, MI, layer, store)
     one_sided = _one_sided(R, I, M, MI, layer, order, store)
     moved = take_ints(store, n)

@@ -1,0 +1,107 @@
+"""The shock sweep leaves out groups of bodies the sweeps settled
+(shock_propagation.leave_out_settled): a movable body is kept exactly when
+it is connected, through movable bodies, to a manifold whose last sweep
+changed an impulse by the bound or more. Checked against a union–find over
+random contact graphs (Hypothesis), and on a scene: a lone resting cube
+beside a stack with a 1000:1 mass ratio, where the stack keeps its sweep and
+the cube's velocities are not touched.
+"""
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from physics_core import load_scene
+from physics_core.collision import shock_propagation as SP
+from physics_core.collision.contact_data import (ITERATIONS, RESTING_BLOCK, SHOCK_ON,
+                                                 VELOCITY_TOLERANCE)
+from physics_core.collision.contact_layout import BODY_A, BODY_B, ICOL, INV_MASS_A, INV_MASS_B, NCOL
+from physics_core.collision.contact_stages import SETTLE
+from physics_core.collision.manifold_friction import FIRST, MICOL
+from physics_core.collision.scratch import empty_store
+from physics_core.collision.sequential_impulses import least_mass, solve_velocities
+from substep_rows import rows_before_solve
+
+DT = 1 / 240
+
+
+def _groups(n, I, movable):
+    """Union–find root of every body over the contacts between movable bodies."""
+    root = list(range(n))
+
+    def find(i):
+        while root[i] != i:
+            root[i] = root[root[i]]
+            i = root[i]
+        return i
+    for a, b in I[:, :2]:
+        if movable[a] and movable[b]:
+            root[find(a)] = find(b)
+    return [find(i) for i in range(n)]
+
+
+def _reference(I, layer, changes, bound):
+    n = len(layer)
+    movable = (layer != 0) & (layer != SP.UNREACHED)
+    group = _groups(n, I, movable)
+    seeds = {group[x] for k in range(len(I)) if not changes[k] < bound
+             for x in I[k, :2] if movable[x]}
+    keep = np.array([bool(movable[i]) and group[i] in seeds for i in range(n)])
+    want = layer.copy()
+    want[(layer != 0) & ~keep] = SP.UNREACHED
+    return want, int(keep.sum())
+
+
+@settings(max_examples=300, deadline=None)
+@given(seed=st.integers(0, 2 ** 32 - 1), n=st.integers(2, 40), contacts=st.integers(0, 80),
+       settled=st.floats(0.0, 1.0), immovable=st.floats(0.0, 0.5))
+def test_a_body_is_kept_only_with_an_unsettled_manifold_in_its_group(seed, n, contacts, settled,
+                                                                      immovable):
+    rng = np.random.default_rng(seed)
+    I = np.zeros((contacts, ICOL), np.int64)
+    I[:, BODY_A] = rng.integers(0, n, contacts)
+    I[:, BODY_B] = (I[:, BODY_A] + rng.integers(1, n, contacts)) % n
+    fixed = rng.random(n) < immovable
+    R = np.zeros((contacts, NCOL))
+    R[:, INV_MASS_A] = np.where(fixed[I[:, BODY_A]], 0.0, 1.0)
+    R[:, INV_MASS_B] = np.where(fixed[I[:, BODY_B]], 0.0, 1.0)
+    MI = np.zeros((contacts, MICOL), np.int64)
+    MI[:, FIRST] = np.arange(contacts)
+    changes = np.where(rng.random(contacts) < settled, 0.5, 2.0)
+    changes[rng.random(contacts) < 0.05] = np.nan          # a NaN change is never settled
+    store = empty_store()
+    layer, graph = SP.support_layers(R, I, n, store)
+    before = layer.copy()
+    kept = SP.leave_out_settled(I, MI, layer, graph, (changes, 1.0), store)
+    want, count = _reference(I, before, changes, 1.0)
+    assert np.array_equal(layer, want)
+    assert kept == count
+
+
+def _cube(name, x, z, mass=1.0):
+    return {"name": name, "shape": {"type": "box", "half_extents": [0.1, 0.1, 0.1]},
+            "mass": mass, "position": [x, 0.0, z]}
+
+
+def test_a_settled_cube_is_left_out_beside_an_unsettled_stack():
+    w = load_scene({"dt": DT, "gravity": "earth", "effects": {"contacts": {"sleep": False}},
+                    "bodies": [{"name": "floor", "shape": {"type": "plane"}, "static": True},
+                               _cube("lone", 1.0, 0.1), _cube("light", 0.0, 0.1),
+                               _cube("heavy", 0.0, 0.3, mass=1000.0)]})
+    w.step(240)
+    R, I, M, MI, vel, omega, quat, store = rows_before_solve(w, DT)
+    cs = w.contact_system
+    fp, ip = cs.fp, cs.ip
+    limit = fp[VELOCITY_TOLERANCE] * least_mass(R)
+    changes = np.empty(len(MI))
+    solve_velocities(R, I, M, MI, vel, omega, ip[ITERATIONS], limit, changes)
+    bound = SETTLE * limit
+    lone = list(w.model.names).index("lone")
+    of_lone = (I[MI[:, FIRST], BODY_A] == lone) | (I[MI[:, FIRST], BODY_B] == lone)
+    assert (changes[of_lone] < bound).all(), "the lone cube's sweeps did not settle"
+    assert not (changes[~of_lone] < bound).all(), "the 1000:1 stack settled in its sweeps"
+    v, o = vel.copy(), omega.copy()
+    visited = SP.shock_sweep(R, I, M, MI, v, o, len(v), ip[SHOCK_ON],
+                             SETTLE * fp[VELOCITY_TOLERANCE], (w._inv_mass, w.inv_inertia, quat),
+                             ip[RESTING_BLOCK] != 0, (changes, bound), store)
+    assert visited == int((~of_lone).sum())           # the stack's two manifolds
+    assert np.array_equal(v[lone], vel[lone]) and np.array_equal(o[lone], omega[lone])
