@@ -4,7 +4,9 @@ it is connected, through movable bodies, to a manifold whose last sweep
 changed an impulse by the bound or more. Checked against a union–find over
 random contact graphs (Hypothesis), and on a scene: a lone resting cube
 beside a stack with a 1000:1 mass ratio, where the stack keeps its sweep and
-the cube's velocities are not touched.
+the cube's velocities are not touched, and where the friction and slip
+computed again for the contacts of the bodies the sweep may have moved
+(swept_bodies) equal those computed again for every contact.
 """
 import numpy as np
 from hypothesis import given, settings
@@ -18,7 +20,8 @@ from physics_core.collision.contact_layout import BODY_A, BODY_B, ICOL, INV_MASS
 from physics_core.collision.contact_stages import SETTLE
 from physics_core.collision.manifold_friction import FIRST, MICOL
 from physics_core.collision.scratch import empty_store
-from physics_core.collision.sequential_impulses import least_mass, solve_velocities
+from physics_core.collision.sequential_impulses import (friction_and_slip, friction_and_slip_of,
+                                                        least_mass, solve_velocities)
 from substep_rows import rows_before_solve
 
 DT = 1 / 240
@@ -100,8 +103,38 @@ def test_a_settled_cube_is_left_out_beside_an_unsettled_stack():
     assert (changes[of_lone] < bound).all(), "the lone cube's sweeps did not settle"
     assert not (changes[~of_lone] < bound).all(), "the 1000:1 stack settled in its sweeps"
     v, o = vel.copy(), omega.copy()
-    visited = SP.shock_sweep(R, I, M, MI, v, o, len(v), ip[SHOCK_ON],
+    visited, _ = SP.shock_sweep(R, I, M, MI, v, o, len(v), ip[SHOCK_ON],
                              SETTLE * fp[VELOCITY_TOLERANCE], (w._inv_mass, w.inv_inertia, quat),
                              ip[RESTING_BLOCK] != 0, (changes, bound), store)
     assert visited == int((~of_lone).sum())           # the stack's two manifolds
     assert np.array_equal(v[lone], vel[lone]) and np.array_equal(o[lone], omega[lone])
+
+
+def test_friction_after_the_sweep_is_the_same_computed_for_the_swept_bodies_alone():
+    w = load_scene({"dt": DT, "gravity": "earth", "effects": {"contacts": {"sleep": False}},
+                    "bodies": [{"name": "floor", "shape": {"type": "plane"}, "static": True},
+                               _cube("lone", 1.0, 0.1), _cube("light", 0.0, 0.1),
+                               _cube("heavy", 0.0, 0.3, mass=1000.0),
+                               _cube("side", 0.21, 0.1)]})
+    w.step(120)
+    R, I, M, MI, vel, omega, quat, store = rows_before_solve(w, DT)
+    fp, ip = w.contact_system.fp, w.contact_system.ip
+    limit = fp[VELOCITY_TOLERANCE] * least_mass(R)
+    changes = np.empty(len(MI))
+    solve_velocities(R, I, M, MI, vel, omega, ip[ITERATIONS], limit, changes)
+    friction, slip = np.zeros((len(R), 3)), np.zeros(len(R))
+    friction_and_slip(R, I, vel, omega, friction, slip)
+    v0, o0 = vel.copy(), omega.copy()
+    visited, layer = SP.shock_sweep(R, I, M, MI, vel, omega, len(vel), ip[SHOCK_ON],
+                                    SETTLE * fp[VELOCITY_TOLERANCE],
+                                    (w._inv_mass, w.inv_inertia, quat), ip[RESTING_BLOCK] != 0,
+                                    (changes, SETTLE * limit), store)
+    layer = np.array(layer)
+    swept = np.array(SP.swept_bodies(layer, store))
+    assert visited > 0 and swept.any() and not swept.all()
+    moved = (np.abs(vel - v0).max(axis=1) > 0) | (np.abs(omega - o0).max(axis=1) > 0)
+    assert not (moved & ~swept).any(), "a body outside the swept layers changed velocity"
+    every_f, every_s = friction.copy(), slip.copy()
+    friction_and_slip(R, I, vel, omega, every_f, every_s)
+    friction_and_slip_of(R, I, vel, omega, friction, slip, swept)
+    assert np.array_equal(friction, every_f) and np.array_equal(slip, every_s)

@@ -67,7 +67,7 @@ def test_converged_sweeps_leave_the_shock_sweep_nothing_to_do(scene):
     assert change < SETTLE * stop, f"{scene}: the sweeps did not converge ({change:.3g} N·s)"
     v, o = vel.copy(), omega.copy()
     every = (np.full(len(MI), np.inf), 0.0)         # every group unsettled: none left out
-    visited = SP.shock_sweep(R, I, M, MI, v, o, len(v), ip[SHOCK_ON], settle,
+    visited, _ = SP.shock_sweep(R, I, M, MI, v, o, len(v), ip[SHOCK_ON], settle,
                              (w._inv_mass, w.inv_inertia, quat), ip[RESTING_BLOCK] != 0, every,
                              store)
     assert visited == len(MI)            # every manifold rests on the layer below

@@ -24,8 +24,9 @@ from .kinetic_drift import kinetic_velocity_change
 from .manifold_friction import anchor_friction_out, anchor_rows, anchor_warm_start
 from .push_out import correct
 from .scratch import take, take_bools, take_int_rows, take_ints, take_rows
-from .sequential_impulses import friction_and_slip, least_mass, solve_velocities, warm_start
-from .shock_propagation import shock_sweep
+from .sequential_impulses import (friction_and_slip, friction_and_slip_of, least_mass,
+                                  solve_velocities, warm_start)
+from .shock_propagation import shock_sweep, swept_bodies
 from .sleep_islands import _sync, _update, _wake_touched
 from .time_of_impact import rewind_fast_bodies
 from .warm_cache import warm_clear, warm_load, warm_store
@@ -158,11 +159,13 @@ def solve_stage(fp, ip, R, I, M, MI, key, vel, omega, warm, J, masses, store):
     # sweep (a resting ball's step 4.2 -> 3.1 us); a stack converging slowly
     # never does
     settle = SETTLE * fp[VELOCITY_TOLERANCE]
-    if ip[SHOCK_ON] and shock_sweep(R, I, M, MI, vel, omega, len(vel), ip[SHOCK_ON], settle,
-                                    masses, ip[RESTING_BLOCK] != 0, (changes, SETTLE * limit),
-                                    store):
-        friction_and_slip(R, I, vel, omega, friction, slip)
-        anchor_friction_out(R, M, MI, friction)
+    if ip[SHOCK_ON]:
+        visited, layer = shock_sweep(R, I, M, MI, vel, omega, len(vel), ip[SHOCK_ON], settle,
+                                     masses, ip[RESTING_BLOCK] != 0, (changes, SETTLE * limit),
+                                     store)
+        if visited:
+            friction_and_slip_of(R, I, vel, omega, friction, slip, swept_bodies(layer, store))
+            anchor_friction_out(R, M, MI, friction)
     slide = kinetic_velocity_change(R, I, M, MI, len(vel), store)
     add_bounces(R, J, friction)
     return friction, sweeps, slide

@@ -168,17 +168,31 @@ def solve_velocities(R, I, M, MI, vel, omega, iterations, limit, changes):
     return iterations, change
 
 
+@njit(cache=True, inline="always")
+def _friction_and_slip_row(R, I, c, vel, omega, friction, slip):
+    a, b = I[c, BODY_A], I[c, BODY_B]
+    for i in range(3):
+        friction[c, i] = R[c, LAM + 1] * R[c, DIR + 3 + i] + R[c, LAM + 2] * R[c, DIR + 6 + i]
+    u1 = row_velocity(R, c, 1, a, b, vel, omega)
+    u2 = row_velocity(R, c, 2, a, b, vel, omega)
+    slip[c] = math.sqrt(u1 * u1 + u2 * u2)
+
+
 @njit(cache=True)
 def friction_and_slip(R, I, vel, omega, friction, slip):
     """Per contact: the tangential impulse as a world vector λ_t1 t1 + λ_t2 t2
     (it survives a change of tangent basis) and the slip speed |u_t| now."""
     for c in range(len(R)):
-        a, b = I[c, BODY_A], I[c, BODY_B]
-        for i in range(3):
-            friction[c, i] = R[c, LAM + 1] * R[c, DIR + 3 + i] + R[c, LAM + 2] * R[c, DIR + 6 + i]
-        u1 = row_velocity(R, c, 1, a, b, vel, omega)
-        u2 = row_velocity(R, c, 2, a, b, vel, omega)
-        slip[c] = math.sqrt(u1 * u1 + u2 * u2)
+        _friction_and_slip_row(R, I, c, vel, omega, friction, slip)
+
+
+@njit(cache=True)
+def friction_and_slip_of(R, I, vel, omega, friction, slip, moved):
+    """friction_and_slip of the contacts with a body marked `moved` (n,): the
+    others' impulses and velocities are those it was computed from."""
+    for c in range(len(R)):
+        if moved[I[c, BODY_A]] or moved[I[c, BODY_B]]:
+            _friction_and_slip_row(R, I, c, vel, omega, friction, slip)
 
 
 @njit(cache=True)

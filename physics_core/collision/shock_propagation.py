@@ -128,12 +128,23 @@ def support_layers(R, I, n, store):
 
 
 @njit(cache=True, inline="always")
-def _any_unsettled(MI, unsettled):
+def _unsettled_count(MI, unsettled):
+    """How many manifolds' last sweep changed an impulse by `bound` or more (or NaN)."""
     changes, bound = unsettled
+    count = 0
     for k in range(len(MI)):
-        if not changes[k] < bound:
-            return True
-    return False
+        count += not changes[k] < bound
+    return count
+
+
+@njit(cache=True)
+def swept_bodies(layer, store):
+    """(n,) the bodies whose velocities the sweep may have changed (shock_sweep's
+    layers: 1 to below UNREACHED), in scratch."""
+    out = take_bools(store, len(layer))
+    for i in range(len(layer)):
+        out[i] = 0 < layer[i] < UNREACHED
+    return out
 
 
 @njit(cache=True, inline="always")
@@ -228,6 +239,13 @@ def _freeze_anchor(M, k, side, w):
         _invert(M, k, w)
 
 
+@njit(cache=True, inline="always")
+def _copy_row(T, k, T1, m):
+    """T1[m] = T[k] as a plain loop (a row slice assignment took twice as long)."""
+    for j in range(T.shape[1]):
+        T1[m, j] = T[k, j]
+
+
 @njit(cache=True)
 def _one_sided(R, I, M, MI, layer, order, store):
     """Compact copies (R1, I1, M1, MI1) of the manifolds of `order`, in that
@@ -242,11 +260,13 @@ def _one_sided(R, I, M, MI, layer, order, store):
     for m in range(len(order)):
         k = order[m]
         first, count = MI[k, FIRST], MI[k, COUNT]
-        M1[m], MI1[m] = M[k], MI[k]
+        _copy_row(M, k, M1, m)
+        _copy_row(MI, k, MI1, m)
         MI1[m, FIRST] = r
         side = 0 if layer[I[first, BODY_A]] < layer[I[first, BODY_B]] else 1
         for c in range(first, first + count):
-            R1[r], I1[r] = R[c], I[c]
+            _copy_row(R, c, R1, r)
+            _copy_row(I, c, I1, r)
             _freeze_row(R1, r, side, count >= 2)
             r += 1
         if count >= 2:
@@ -522,12 +542,16 @@ def shock_sweep(R, I, M, MI, vel, omega, n, passes, tolerance, masses, block, un
     body resting on one support through three or more points at once,
     resting_block.py), over the groups of bodies the sweeps left unsettled
     (leave_out_settled); the rows' and anchors' λ updated in place. Returns
-    the number of manifolds visited."""
-    if not _any_unsettled(MI, unsettled):
-        return 0
+    (the number of manifolds visited, the bodies' layers: only a body with
+    a layer from 1 to below UNREACHED may have had its velocity changed)."""
+    unsettled_count = _unsettled_count(MI, unsettled)
+    if unsettled_count == 0:
+        return 0, take_ints(store, 0)
     layer, graph = support_layers(R, I, n, store)
-    if leave_out_settled(I, MI, layer, graph, unsettled, store) == 0:
-        return 0
+    # every reached body has a manifold: with all of them unsettled, none is left out
+    if (unsettled_count < len(MI)
+            and leave_out_settled(I, MI, layer, graph, unsettled, store) == 0):
+        return 0, layer
     order, top = _upward_order(I, MI, layer, store)
     one_sided = _one_sided(R, I, M, MI, layer, order, store)
     moved = take_ints(store, n)
@@ -550,4 +574,4 @@ def shock_sweep(R, I, M, MI, vel, omega, n, passes, tolerance, masses, block, un
                                 layer, masses, kept, mark, resting, store)
         g = e
     _scatter_impulses(R, M, MI, order, one_sided[0], one_sided[2], one_sided[3], kept)
-    return len(order)
+    return len(order), layer
