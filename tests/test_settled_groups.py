@@ -85,19 +85,27 @@ def _cube(name, x, z, mass=1.0):
             "mass": mass, "position": [x, 0.0, z]}
 
 
-def test_a_settled_cube_is_left_out_beside_an_unsettled_stack():
+def _swept(extra, steps):
+    """A lone cube, a 1 kg cube under a 1,000 kg one and `extra` bodies after
+    `steps` steps, then one substep's rows solved by the sweeps as
+    solve_stage runs them: (world, R, I, M, MI, vel, omega, quat, store,
+    each manifold's last change, the skip's bound)."""
     w = load_scene({"dt": DT, "gravity": "earth", "effects": {"contacts": {"sleep": False}},
                     "bodies": [{"name": "floor", "shape": {"type": "plane"}, "static": True},
                                _cube("lone", 1.0, 0.1), _cube("light", 0.0, 0.1),
-                               _cube("heavy", 0.0, 0.3, mass=1000.0)]})
-    w.step(240)
+                               _cube("heavy", 0.0, 0.3, mass=1000.0)] + extra})
+    w.step(steps)
     R, I, M, MI, vel, omega, quat, store = rows_before_solve(w, DT)
     cs = w.contact_system
-    fp, ip = cs.fp, cs.ip
-    limit = fp[VELOCITY_TOLERANCE] * least_mass(R)
+    limit = cs.fp[VELOCITY_TOLERANCE] * least_mass(R)
     changes = np.empty(len(MI))
-    solve_velocities(R, I, M, MI, vel, omega, ip[ITERATIONS], limit, changes)
-    bound = SETTLE * limit
+    solve_velocities(R, I, M, MI, vel, omega, cs.ip[ITERATIONS], limit, changes)
+    return w, R, I, M, MI, vel, omega, quat, store, changes, SETTLE * limit
+
+
+def test_a_settled_cube_is_left_out_beside_an_unsettled_stack():
+    w, R, I, M, MI, vel, omega, quat, store, changes, bound = _swept([], 240)
+    fp, ip = w.contact_system.fp, w.contact_system.ip
     lone = list(w.model.names).index("lone")
     of_lone = (I[MI[:, FIRST], BODY_A] == lone) | (I[MI[:, FIRST], BODY_B] == lone)
     assert (changes[of_lone] < bound).all(), "the lone cube's sweeps did not settle"
@@ -111,24 +119,16 @@ def test_a_settled_cube_is_left_out_beside_an_unsettled_stack():
 
 
 def test_friction_after_the_sweep_is_the_same_computed_for_the_swept_bodies_alone():
-    w = load_scene({"dt": DT, "gravity": "earth", "effects": {"contacts": {"sleep": False}},
-                    "bodies": [{"name": "floor", "shape": {"type": "plane"}, "static": True},
-                               _cube("lone", 1.0, 0.1), _cube("light", 0.0, 0.1),
-                               _cube("heavy", 0.0, 0.3, mass=1000.0),
-                               _cube("side", 0.21, 0.1)]})
-    w.step(120)
-    R, I, M, MI, vel, omega, quat, store = rows_before_solve(w, DT)
+    w, R, I, M, MI, vel, omega, quat, store, changes, bound = _swept([_cube("side", 0.21, 0.1)],
+                                                                     120)
     fp, ip = w.contact_system.fp, w.contact_system.ip
-    limit = fp[VELOCITY_TOLERANCE] * least_mass(R)
-    changes = np.empty(len(MI))
-    solve_velocities(R, I, M, MI, vel, omega, ip[ITERATIONS], limit, changes)
     friction, slip = np.zeros((len(R), 3)), np.zeros(len(R))
     friction_and_slip(R, I, vel, omega, friction, slip)
     v0, o0 = vel.copy(), omega.copy()
     visited, layer = SP.shock_sweep(R, I, M, MI, vel, omega, len(vel), ip[SHOCK_ON],
                                     SETTLE * fp[VELOCITY_TOLERANCE],
                                     (w._inv_mass, w.inv_inertia, quat), ip[RESTING_BLOCK] != 0,
-                                    (changes, SETTLE * limit), store)
+                                    (changes, bound), store)
     layer = np.array(layer)
     swept = np.array(SP.swept_bodies(layer, store))
     assert visited > 0 and swept.any() and not swept.all()

@@ -39,8 +39,8 @@ both, and making it try threw the top boxes off a tall pyramid.
 On a converged solve the sweep changes nothing (no contact approaches or
 slips); it only removes what the sweeps left, so a group of bodies whose
 manifolds all ended the sweeps changing no impulse by more than a
-hundredth of their stop is left out (leave_out_settled), and the sweep is
-not run when every group is (contact_stages.solve_stage). The warm cache keeps the
+hundredth of their stop is left out (leave_out_settled), and the sweep
+returns at once when every group is (shock_sweep). The warm cache keeps the
 sweeps' own impulses (contact_stages.solve_stage), so the next substep's
 solve starts from its own converging values.
 """
@@ -137,20 +137,27 @@ def _unsettled_count(MI, unsettled):
     return count
 
 
+@njit(cache=True, inline="always")
+def _in_sweep(body_layer):
+    """A movable body the search reached (layer 1 to below UNREACHED): the
+    only kind the sweep gives a velocity change."""
+    return 0 < body_layer < UNREACHED
+
+
 @njit(cache=True)
 def swept_bodies(layer, store):
     """(n,) the bodies whose velocities the sweep may have changed (shock_sweep's
-    layers: 1 to below UNREACHED), in scratch."""
+    layers, _in_sweep), in scratch."""
     out = take_bools(store, len(layer))
     for i in range(len(layer)):
-        out[i] = 0 < layer[i] < UNREACHED
+        out[i] = _in_sweep(layer[i])
     return out
 
 
 @njit(cache=True, inline="always")
 def _reach(i, layer, active, queue, tail):
-    """Body i queued (returns the new tail) if it is movable and reached, and not yet active."""
-    if layer[i] == 0 or layer[i] == UNREACHED or active[i]:
+    """Body i queued (returns the new tail) if it is in the sweep and not yet active."""
+    if not _in_sweep(layer[i]) or active[i]:
         return tail
     active[i] = True
     queue[tail] = i
@@ -182,7 +189,7 @@ def leave_out_settled(I, MI, layer, graph, unsettled, store):
         for e in range(start[i], start[i + 1]):
             tail = _reach(other[e], layer, active, queue, tail)
     for i in range(len(layer)):
-        if layer[i] != 0 and not active[i]:
+        if _in_sweep(layer[i]) and not active[i]:
             layer[i] = UNREACHED
     return tail
 
