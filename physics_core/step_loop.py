@@ -2,7 +2,8 @@
 
 Each stage is its own compiled function (integration.py for the integrator
 and the force effects, collision/contact_substep.py for the contact stages),
-timed with the cycle counter into `prof` and followed by the finite check.
+timed with the cycle counter into `prof` (one reading at each boundary
+between stages: cycle_clock.lap) and followed by the finite check.
 Looping in compiled code means a step pays no interpreter cost, and the
 inputs (step_inputs.py: one object holding every array) are passed once per
 call of world.step(n), not once per step.
@@ -18,7 +19,7 @@ from .borrowed import borrow
 from .collision.contact_substep import N_STAGES
 from .collision.contact_substep import run as contact_substep
 from .collision.scratch import new_counts, new_scratch, open_arena, take_rows
-from .cycle_clock import cycles
+from .cycle_clock import cycles, lap
 from .finite import all_finite
 from .adaptive import ADAPTIVE, advance
 from .integration import integrate_substep
@@ -35,7 +36,6 @@ def _integrate(code, h, idata, body, loads, masses, work, adaptive, prof):
     pos, quat, vel, omega, awake = body
     user_force, user_force_offset, user_torque, flags = loads
     inv_mass, inertia, inv_inertia = masses
-    t = cycles()
     if code == ADAPTIVE:          # error-controlled internal steps over this substep (adaptive.py)
         advance(h, idata, (pos, quat, vel, omega), (inv_mass, inertia, inv_inertia, idata[1]),
                 (user_force, user_force_offset, user_torque, flags[0] != 0, flags[1] != 0),
@@ -44,15 +44,6 @@ def _integrate(code, h, idata, body, loads, masses, work, adaptive, prof):
         integrate_substep(code, h, idata, pos, quat, vel, omega, inv_mass, inertia, inv_inertia,
                           user_force, user_force_offset, user_torque, flags[0] != 0, flags[1] != 0,
                           flags[2] != 0, work, prof[FORCES:])
-    prof[INTEGRATE] += cycles() - t
-
-
-@njit(cache=True, inline="always")
-def _finite(body, prof):
-    t = cycles()
-    ok = all_finite(body[0], body[1], body[2], body[3])
-    prof[FINITE] += cycles() - t
-    return ok
 
 
 @njit(cache=True, inline="always")
@@ -80,13 +71,17 @@ def _one_step(substeps, dt, code, idata, body, loads, masses, work, contacts, ad
     for sub in range(substeps):
         store = open_arena(scratch, cap)
         start = _start(body, store)
+        t = cycles()
         _integrate(code, h, idata, body, loads, masses, work, adaptive, prof)
-        if not _finite(body, prof):
+        t = lap(prof, INTEGRATE, t)
+        ok = all_finite(body[0], body[1], body[2], body[3])
+        t = lap(prof, FINITE, t)
+        if not ok:
             return FAILED_INTEGRATE
         if len(cm.kind):
             failed = contact_substep(cm, fp, ip, body, (masses[0], masses[2]), start, sleep,
                                      warm, events, h, dt, sub == 0, sub == substeps - 1, cap,
-                                     store, prof)
+                                     store, prof, t)
             if failed >= 0:
                 return failed
     return -1

@@ -1,5 +1,5 @@
 """All the contact stages of one substep in one compiled call (COURSE.md 5),
-each timed and followed by the finite check.
+each followed by the finite check and timed, check included.
 
 Stage order: ccd, collide (rows, warm start), restitution (the collision
 pass, bounce.py), solve, correct, events, and sleep on the step's last
@@ -9,7 +9,7 @@ finite (the caller names it and the bodies).
 from numba import njit
 
 from ..borrowed import borrow, keep_alive
-from ..cycle_clock import cycles
+from ..cycle_clock import lap
 from ..finite import all_finite, velocities_finite
 from .contact_data import (CCD_ITERATIONS, CCD_ON, CCD_THRESHOLD, CCD_TOLERANCE, MARGIN,
                            SLEEP_ON)
@@ -100,25 +100,27 @@ def _velocities(vel, omega, moves, store):
 # arrays field by field on the stack once per substep, about a tenth of a
 # resting ball's step.
 @njit(cache=True, inline="always")
-def run(cm, fp, ip, s, masses, start, sleep, warm, events, h, dt, first, last, cap, store, prof):
+def run(cm, fp, ip, s, masses, start, sleep, warm, events, h, dt, first, last, cap, store, prof,
+        t):
     """The contact stages of one substep; -1 or the failing stage. s = (pos,
     quat, vel, omega, awake); start = the same four at the start of the
     substep; masses = the solver's (inv_mass, inv_inertia),
     updated here when bodies wake or sleep; cap: scratch.py's counts (the
     row-count guess updated here); store: the substep's scratch (scratch.py),
-    whose views need no keep_alive."""
+    whose views need no keep_alive; t the cycle counter at the start of the
+    stages (each stage's time runs from the end of the one before, its
+    finite check included: cycle_clock.lap)."""
     pos, quat, vel, omega, awake = s
     toi = take(store, len(pos))
     toi[:] = -1.0
     if first:
         events_reset(events)
     if ip[CCD_ON]:
-        t = cycles()
         ccd_stage(cm, fp, ip, pos, quat, omega, awake, start[0], start[1], toi, store)
-        prof[CCD] += cycles() - t
-        if not _finite(pos, quat, vel, omega):
+        ok = _finite(pos, quat, vel, omega)
+        t = lap(prof, CCD, t)
+        if not ok:
             return CCD
-    t = cycles()
     made = _collide(cm, fp, ip, s, masses, start, sleep, warm, toi, h, cap[ROW_GUESS], store)
     rows = borrow(made)
     cap[ROW_GUESS] = rows[5] + rows[5] // 8 + 4
@@ -126,45 +128,43 @@ def run(cm, fp, ip, s, masses, start, sleep, warm, events, h, dt, first, last, c
     # and the correct stage has nothing to move: it is skipped
     moves = len(rows[1]) > 0 or _any_rewound(toi)
     before = _velocities(vel, omega, moves, store)
-    prof[COLLIDE] += cycles() - t
+    t = lap(prof, COLLIDE, t)
     failed = _respond(cm, fp, ip, s, masses, start, sleep, warm, events, h, dt, last, prof, rows,
-                      toi, before, moves, store)
+                      toi, before, moves, store, t)
     keep_alive(made)
     return failed
 
 
 @njit(cache=True, inline="always")
 def _respond(cm, fp, ip, s, masses, start, sleep, warm, events, h, dt, last, prof, rows, toi,
-             before, moves, store):
+             before, moves, store, t):
     """restitution, solve, correct, events and sleep on the collide stage's
-    rows = (contacts, R, I, M, MI, k); -1 or the failing stage."""
+    rows = (contacts, R, I, M, MI, k), timed from t; -1 or the failing stage."""
     pos, quat, vel, omega, awake = s
     contacts, R, I, M, MI, _ = rows
-    t = cycles()
     target, tau, J = restitution_stage(fp, ip, R, I, M, MI, vel, omega, start[2], start[3], h,
                                        store)
-    prof[RESTITUTION] += cycles() - t
-    if not velocities_finite(vel, omega):       # the pass changes velocities only
+    ok = velocities_finite(vel, omega)          # the pass changes velocities only
+    t = lap(prof, RESTITUTION, t)
+    if not ok:
         return RESTITUTION
-    t = cycles()
     friction, _, slide = solve_stage(fp, ip, R, I, M, MI, contacts[5], vel, omega, warm, J,
                                      (masses[0], masses[1], quat), store)
-    prof[SOLVE] += cycles() - t
-    if not velocities_finite(vel, omega):       # as does the solve
+    ok = velocities_finite(vel, omega)          # as does the solve
+    t = lap(prof, SOLVE, t)
+    if not ok:
         return SOLVE
-    t = cycles()
     if moves:
         _correct(cm, fp, ip, R, I, s, before[0], before[1], target, tau, toi, slide, h, store)
-    prof[CORRECT] += cycles() - t
-    if not _finite(pos, quat, vel, omega):
+    ok = _finite(pos, quat, vel, omega)
+    t = lap(prof, CORRECT, t)
+    if not ok:
         return CORRECT
-    t = cycles()
     moving = moving_bodies(cm.is_static, awake, store)
     _events(events, contacts, R, friction, moving, last, store)
-    prof[EVENTS] += cycles() - t
+    t = lap(prof, EVENTS, t)
     if last and ip[SLEEP_ON]:
-        t = cycles()
         if sleep_stage(cm, fp, R, I, awake, vel, omega, sleep, dt):
             solver_masses(cm, awake, masses[0], masses[1])
-        prof[SLEEP] += cycles() - t
+        lap(prof, SLEEP, t)
     return -1
