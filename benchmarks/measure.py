@@ -17,7 +17,11 @@ import subprocess
 import sys
 from time import perf_counter
 
-WARMUP = 5          # steps before timing: first contacts, caches, lazy set-up
+WARMUP = 5          # steps before timing: first contacts, caches, lazy set-up; taken as
+                    # WARMUP calls of one step, the calls PyBullet's and MuJoCo's step(n)
+                    # make (one per step): the interpreter's first passes through an
+                    # engine's step call cost tens of µs, and one call of WARMUP steps
+                    # left this engine's first timed calls to pay them
 HEARTBEAT = 15.0    # s between progress lines of a long measurement
 
 
@@ -45,7 +49,8 @@ def measure_here(scene_module, scene_function, n, engine, steps):
     t0 = perf_counter()
     step, positions, stages = engines.build(engine, bodies)
     build = perf_counter() - t0
-    step(WARMUP)
+    for _ in range(WARMUP):
+        step(1)
     before = stages() or {}
     t0 = last = perf_counter()
     chunk = max(1, steps // 20)
