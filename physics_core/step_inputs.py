@@ -11,7 +11,7 @@ holding them all: the dispatcher then types and unboxes one object (about
 have exactly the types of the arrays given (nothing is trusted blindly);
 the World packs again whenever one of those arrays is replaced (a body
 added or removed, a reset, bodies woken from Python, a state array
-assigned: the last is what `inputs_key` detects). The structure keeps a reference to
+assigned: the last is what `same_arrays` detects). The structure keeps a reference to
 every array it holds, so none of them can be freed while it is in use.
 
 `compiled_entry` then skips the dispatcher itself: the compiled function
@@ -48,16 +48,24 @@ def pack(idata, body, loads, masses, work, contacts, warm_keys, warm_values,
                       warm_values, event_ints, event_floats, event_counts, scratch, adaptive, prof)
 
 
-def inputs_key(state):
-    """What the World cannot see replaced: the identities of the state arrays
-    the step reads and writes (anyone may assign one). Everything else in
-    the inputs is the World's own or its contact system's, replaced only in
-    World._build and World.refresh_awake (which reset() ends with), and
-    those drop the packed inputs themselves.
-    Identities are safe: the packed inputs hold the arrays, so no id can be
-    reused while they live."""
-    return (id(state.pos), id(state.quat), id(state.vel), id(state.omega), id(state.awake),
-            id(state.user_force), id(state.user_force_offset), id(state.user_torque))
+def state_arrays(state):
+    """What the World cannot see replaced: the state arrays the step reads and
+    writes (anyone may assign one). Everything else in the inputs is the
+    World's own or its contact system's, replaced only in World._build and
+    World.refresh_awake (which reset() ends with), and those drop the packed
+    inputs themselves."""
+    return (state.pos, state.quat, state.vel, state.omega, state.awake,
+            state.user_force, state.user_force_offset, state.user_torque)
+
+
+def same_arrays(arrays, state):
+    """Whether `state` still holds exactly these arrays (state_arrays), by
+    identity: about 0.1 µs, against 0.37 µs for comparing a tuple of their
+    ids made anew, on every world.step call."""
+    pos, quat, vel, omega, awake, force, offset, torque = arrays
+    return (state.pos is pos and state.quat is quat and state.vel is vel
+            and state.omega is omega and state.awake is awake and state.user_force is force
+            and state.user_force_offset is offset and state.user_torque is torque)
 
 
 def compiled_entry(dispatcher, args):

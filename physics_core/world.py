@@ -41,7 +41,7 @@ from .isolation import freeze_rows, frozen_model
 from .integration import (EFFECT_NAMES, INTEGRATOR_CODES, N_EFFECTS, can_make_torque, forces,
                           integration_data, integration_profile, integration_work)
 from .state import State
-from .step_inputs import compiled_entry, inputs_key, pack
+from .step_inputs import compiled_entry, pack, same_arrays, state_arrays
 from .step_loop import FAILED_INTEGRATE, FINITE, FORCES, INTEGRATE, no_contacts, run_steps
 from .world_commands import CommandsMixin
 from .world_reading import ReadingMixin
@@ -62,7 +62,7 @@ class World(CommandsMixin, ReadingMixin):
     def _build(self, model):
         """Everything the step derives from the model (again after add/remove_body)."""
         self.model = model
-        self._packed = None           # (inputs_key, StepInputs, entry): packed at the next step
+        self._packed = None           # (state_arrays, StepInputs, entry): packed at the next step
         self.spring_substeps = stable_substeps(model, model.dt)
         self.substeps = max(model.substeps, self.spring_substeps)
         self.isotropic = isotropic_rows(model.inertia)   # free rotation is exact for these
@@ -134,11 +134,11 @@ class World(CommandsMixin, ReadingMixin):
         return self._current_inputs()[1]
 
     def _current_inputs(self):
-        """(inputs_key, StepInputs, the compiled run_steps for them:
+        """(state_arrays, StepInputs, the compiled run_steps for them:
         step_inputs.compiled_entry), packed again only when an array in
         them was replaced since the last step."""
         packed = self._packed
-        if packed is not None and packed[0] == inputs_key(self.state):
+        if packed is not None and same_arrays(packed[0], self.state):
             return packed
         s, cs = self.state, self.contact_system
         contacts, (warm_keys, warm_values), (ints, floats, counts), scratch = (
@@ -149,7 +149,7 @@ class World(CommandsMixin, ReadingMixin):
                       warm_keys, warm_values, ints, floats, counts, scratch, self._adaptive,
                       self._cycles)
         entry = compiled_entry(run_steps, (inputs, 1, 1, 1.0, self._code))
-        self._packed = (inputs_key(s), inputs, entry)
+        self._packed = (state_arrays(s), inputs, entry)
         return self._packed
 
     def _seconds(self, cycles, steps=1):
