@@ -82,3 +82,34 @@ def test_kinetic_bound_leaves_a_slip_against_the_impulse_on_the_disk(a11, a22, c
     left = np.linalg.solve(A, lam - star)
     cos = left @ lam / (np.linalg.norm(left) * np.linalg.norm(lam))
     assert cos == pytest.approx(-1.0, abs=1e-9)
+
+
+@settings(max_examples=100, deadline=None)
+@given(a11=st.floats(0.05, 20.0), a22=st.floats(0.05, 20.0), c=st.floats(-0.95, 0.95),
+       angle=st.floats(0.0, 2 * math.pi), lim=st.sampled_from([1e-309, 1e-250, 1e-120, 1e-61]))
+def test_a_tiny_friction_coefficient_does_not_make_the_solve_nan(a11, a22, c, angle, lim):
+    """μ = 2.2e-309 between a box and the floor made the solve NaN: σ ~ |λ*|/lim
+    overflowed (I + σA)'s determinant. Now λ is finite, on |λ| = lim, and
+    the slip left is against it, as for any other lim."""
+    A = np.array([[a11, c * math.sqrt(a11 * a22)], [c * math.sqrt(a11 * a22), a22]])
+    star = 3.0 * np.array([math.cos(angle), math.sin(angle)])
+    lam = np.array(kinetic_bound(A[0, 0], A[0, 1], A[1, 1], star[0], star[1], lim))
+    assert np.all(np.isfinite(lam))
+    unit = lam / lim                 # |λ| itself is below what a cosine can be taken of
+    assert np.linalg.norm(unit) == pytest.approx(1.0, rel=1e-9)
+    left = np.linalg.solve(A, lam - star)
+    cos = left @ unit / (np.linalg.norm(left) * np.linalg.norm(unit))
+    assert cos == pytest.approx(-1.0, abs=1e-9)
+
+
+def test_a_box_sliding_on_a_floor_of_friction_1e_309_stays_finite():
+    """The scene-level case of the one above: the box slides on, its speed kept
+    (μ m g ~ 1e-308 N takes nothing off it)."""
+    w = load_scene({"dt": 1 / 240, "gravity": "earth", "effects": {"contacts": {}},
+                    "friction": [{"a": "default", "b": "default", "static": 2.2e-309,
+                                  "kinetic": 2.2e-309}],
+                    "bodies": [{"name": "floor", "shape": {"type": "plane"}, "static": True},
+                               {"name": "b", "shape": {"type": "box", "half_extents": [0.1] * 3},
+                                "mass": 1.0, "position": [0, 0, 0.1], "velocity": [1.0, 0, 0]}]})
+    w.step(60)
+    assert w.body("b").velocity[0] == pytest.approx(1.0, abs=1e-9)

@@ -1,24 +1,22 @@
-"""Restitution: the collision pass, before the contact solve (COURSE.md 5,
-coefficient of restitution, friction).
+"""Restitution of one contact: the bounce rule, its timing and its friction
+(COURSE.md 5, coefficient of restitution, friction); the collision pass
+that sweeps them is collision_pass.py.
 
-Contacts are visited in key order, sweep after sweep. A contact whose
-normal velocity approaches faster than `restitution_threshold`, and whose
-surfaces meet within the substep, gets the course's pairwise impulse
+A contact whose normal velocity approaches faster than
+`restitution_threshold`, and whose surfaces meet within the substep, is
+to separate at C_R × its approach speed (`bounce_goal`): alone, by the
+course's pairwise impulse
 
-    j = (1 + C_R) (−u_n) / W_00      (W_00 = 1/m_a + 1/m_b + rotational terms)
+    j = (1 + C_R) (−u_n) / W_00      (W_00 = 1/m_a + 1/m_b + rotational terms);
 
-so that it separates at C_R × its approach speed, and friction acts on that
-same impulse: kinetic μ_k j against the slip, or, when the impulse that
-stops the slip lies within μ_s j, exactly that impulse (the contact grips).
-Sweeps repeat until no contact approaches (at most
-`restitution_iterations`): a ball that hits a row of touching balls passes
-the blow along the row pair by pair, as elastic collisions do, so C_R = 1
-without friction keeps the kinetic energy and C_R's definition holds
-contact by contact. What still approaches after the pass, and everything
-slower than the threshold (resting contact, C_R = 0), and every impact
-with C_R = 0 (all of a manifold's points are stopped together there), is
-left to the sequential-impulse solve. With `restitution_ramp` > 0, C_R rises linearly
-from 0 over that band above the threshold.
+the points of one manifold together (collision_pass.py). Friction acts on
+that same impulse: kinetic μ_k j against the slip, or, when the impulse
+that stops the slip lies within μ_s j, exactly that impulse (the contact
+grips). What still approaches after the pass, and everything slower than
+the threshold (resting contact, C_R = 0), and every impact with C_R = 0
+(all of a manifold's points are stopped together there), is left to the
+sequential-impulse solve. With `restitution_ramp` > 0, C_R rises
+linearly from 0 over that band above the threshold.
 
 The pass's impulses J (normal, two tangents) are kept apart from the
 solve's accumulated λ, which they would otherwise cancel (the solve drives
@@ -34,7 +32,7 @@ import math
 from numba import njit
 
 from .contact_build import row_velocity
-from .contact_layout import (BODY_A, BODY_B, DEPTH, DIR, E, LAM, MASS_N, MU_K, MU_S, U0,
+from .contact_layout import (BODY_A, BODY_B, DEPTH, DIR, E, LAM, MU_K, MU_S, U0,
                              W_TT_INV)
 from .sequential_impulses import apply_impulse
 
@@ -109,61 +107,24 @@ def impact_terms(R, I, vel_start, omega_start, h, w, onset):
 
 
 @njit(cache=True, inline="always")
-def bounce_contact(R, I, c, threshold, ramp, h, vel, omega, onset, target, tau, J):
-    """The pairwise bounce of contact c if it approaches and meets; True if it
-    bounced. Its first bounce of the substep happens at the impact, with
-    the approach speed at τ (impact_terms); a later one is a plain
-    pairwise collision."""
-    a, b = I[c, BODY_A], I[c, BODY_B]
-    u_now = row_velocity(R, c, 0, a, b, vel, omega)
+def bounce_goal(R, c, threshold, ramp, h, u_now, onset, target, J):
+    """(goal, C_R × approach, τ) of contact c at normal velocity u_now: the
+    u_n its bounce must reach, NaN if it does not bounce (it does not
+    approach faster than the threshold, its surfaces do not meet within the
+    substep, or C_R is 0). Its first bounce of the substep happens at the
+    impact, with the approach speed at τ (impact_terms); a later one is a
+    plain pairwise collision."""
     after, when, shift = 0.0, 1.0, 0.0
     if target[c] == 0.0 and J[c, 0] == 0.0:
         after, when, shift = onset[c, AFTER], onset[c, WHEN], onset[c, SHIFT]
     u_imp = u_now + shift - after    # physical, at the impact, with the impulses so far
     approach = -u_imp
     if not (approach > threshold and approach * h > -R[c, DEPTH]):
-        return False
+        return math.nan, 0.0, when
     e = effective_restitution(R[c, E], approach, threshold, ramp)
     if not e > 0.0:                  # an inelastic impact is the solve's (all its points at once)
-        return False
-    jn = (e * approach + after - shift - u_now) * R[c, MASS_N]
-    if not jn > 0.0:
-        return False
-    apply_impulse(R, c, 0, jn, a, b, vel, omega)
-    s1, s2 = bounce_friction(R, c, a, b, jn, vel, omega)
-    J[c, 0] += jn
-    J[c, 1] += s1
-    J[c, 2] += s2
-    if target[c] == 0.0:             # the first bounce of this contact sets its timing
-        target[c] = e * approach
-        tau[c] = when
-    return True
-
-
-@njit(cache=True)
-def collision_pass(R, I, vel, omega, vel_start, omega_start, threshold, ramp, h, w, sweeps,
-                   target, tau, J, onset):
-    """Sweeps of pairwise bounces until none bounces (at most `sweeps`).
-    target[c] = C_R × approach of contact c's first bounce (0: it did not
-    bounce elastically), tau[c] its impact fraction (1 when none), J (k, 3)
-    the impulses applied; vel_start, omega_start: the velocities at the
-    start of the substep; onset (k, 3): scratch for impact_terms. Returns
-    the number of bounces."""
-    for c in range(len(R)):
-        target[c] = 0.0
-        tau[c] = 1.0
-        J[c, 0] = J[c, 1] = J[c, 2] = 0.0
-    impact_terms(R, I, vel_start, omega_start, h, w, onset)
-    count = 0
-    for sweep in range(sweeps):
-        bounced = 0
-        for c in range(len(R)):
-            bounced += bounce_contact(R, I, c, threshold, ramp, h, vel, omega, onset, target,
-                                      tau, J)
-        count += bounced
-        if bounced == 0:
-            break
-    return count
+        return math.nan, 0.0, when
+    return e * approach + after - shift, e * approach, when
 
 
 @njit(cache=True)

@@ -10,7 +10,8 @@ cache, the sleep state and the event log's state.
 import numpy as np
 from numba import njit
 
-from .bounce import add_bounces, collision_pass
+from .bounce import add_bounces
+from .collision_pass import PASS_COLS, collision_pass
 from .contact_build import build_rows, inertia_table
 from .contact_data import (CCD_ITERATIONS, CCD_THRESHOLD, CCD_TOLERANCE, CORRECTION_RATE,
                            END_WEIGHT, ITERATIONS, MARGIN, MAX_CORRECTION_SPEED,
@@ -129,7 +130,7 @@ def restitution_stage(fp, ip, R, I, M, MI, vel, omega, v0, w0, h, store):
     target, tau, J = take(store, k), take(store, k), take_rows(store, k, 3)
     collision_pass(R, I, vel, omega, v0, w0, fp[RESTITUTION_THRESHOLD], fp[RESTITUTION_RAMP], h,
                    fp[END_WEIGHT], ip[RESTITUTION_ITERATIONS], target, tau, J,
-                   take_rows(store, k, 3))
+                   take_rows(store, k, PASS_COLS))
     return target, tau, J
 
 

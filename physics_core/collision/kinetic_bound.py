@@ -27,6 +27,10 @@ from numba import njit
 
 _TINY = 1e-300
 NEWTON_STEPS = 30          # a few suffice; the cap keeps a bad case finite
+# |λ*| / lim above this: σ ~ |λ*| / lim, and (I + σ A)'s determinant (~σ²)
+# would overflow; λ is then taken at its limit for σ → ∞, along A⁻¹ λ*
+# (a friction coefficient of 1e-309 made the solve NaN)
+FAR = 1e60
 
 
 @njit(cache=True)
@@ -54,13 +58,27 @@ def _first_sigma(a11, a12, a22, norm, lim):
 
 
 @njit(cache=True)
+def _far_limit(a11, a12, a22, lt1, lt2, lim):
+    """λ on |λ| = lim along A⁻¹ λ* (the direction of (I + σ A)⁻¹ λ* as σ → ∞;
+    A's adjugate, as A is positive definite); 0 when that is not defined."""
+    y1, y2 = a22 * lt1 - a12 * lt2, a11 * lt2 - a12 * lt1
+    size = math.sqrt(y1 * y1 + y2 * y2)
+    if not (size > 0.0 and size < math.inf):
+        return 0.0, 0.0
+    return y1 * (lim / size), y2 * (lim / size)
+
+
+@njit(cache=True)
 def kinetic_bound(a11, a12, a22, lt1, lt2, lim):
     """λ on |λ| = lim with the slip after the update against it (module
     docstring); A = [[a11, a12], [a12, a22]] = W_tt⁻¹, λ* = (lt1, lt2) the
     impulse that would stop the slip."""
     if not lim > 0.0:
         return 0.0, 0.0
-    sigma = _first_sigma(a11, a12, a22, math.sqrt(lt1 * lt1 + lt2 * lt2), lim)
+    norm = math.sqrt(lt1 * lt1 + lt2 * lt2)
+    if norm > FAR * lim:
+        return _far_limit(a11, a12, a22, lt1, lt2, lim)
+    sigma = _first_sigma(a11, a12, a22, norm, lim)
     x1, x2 = lt1, lt2
     for _ in range(NEWTON_STEPS):
         x1, x2, d1, d2 = _shrunk(a11, a12, a22, lt1, lt2, sigma)
