@@ -16,7 +16,8 @@ impulse λ_i ≥ 0 that is zero where it separates faster,
     u_i(λ) ≥ g_i,   λ_i ≥ 0,   λ_i (u_i(λ) − g_i) = 0,
 
 solved by sweeps over the manifold's points (projected Gauss–Seidel on the
-accumulated λ, until a sweep changes no λ by BLOCK_TOLERANCE of their sum).
+accumulated λ, until a sweep changes no λ by BLOCK_TOLERANCE of their sum),
+started from the even share (_even_start).
 Bounced point by point instead, the first corner of a box landing flat took
 the whole blow and the box left the floor turning: a 20 cm cube dropped
 flat on its face from 5 cm with C_R = 0.5 spun at 3.8 rad/s and slid at
@@ -41,7 +42,7 @@ from .pair_velocity import load_pair, pair_impulse, pair_velocity, store_pair
 GOAL, ACC, EA, AT = AFTER + 1, AFTER + 2, AFTER + 3, AFTER + 4
 PASS_COLS = AT + 1
 BLOCK_SWEEPS = 100        # sweeps over one manifold's points at most (about 0.7 a sweep
-                          # on four coplanar corners: 60 reach 1e-9)
+                          # on four coplanar corners, from zero: 60 reach 1e-9)
 BLOCK_TOLERANCE = 1e-9    # × the manifold's total impulse: its sweeps have converged
 ENERGY_TOLERANCE = 1e-9   # × Σ λ_i |g_i|: rounding, not a gain
 
@@ -73,11 +74,36 @@ def _goals(R, first, end, p, terms, target, J, table):
 
 
 @njit(cache=True)
-def _sweeps(R, first, end, p, table):
-    """Projected Gauss–Seidel on the points' λ (module docstring), from the
-    pair's velocities p: (p after, the kinetic energy the impulses gained,
-    Σ λ_i |g_i| for scale)."""
+def _even_start(R, first, end, p, table):
+    """The sweeps' start for two or more points: λ_i = (g_i − u_i) / Σ_j W_ij
+    over the bouncing points j (their velocity change for a unit impulse on
+    each), the answer where every point needs the same share, as on a face
+    landing flat (the sweeps from zero took about 60 sweeps there), and a
+    start otherwise. Applied in turn: (p after, the energy they gained,
+    dλ (u + ½ dλ W_ii) each)."""
+    q = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    for c in range(first, end):
+        if table[c, GOAL] == table[c, GOAL]:
+            q = pair_impulse(R, c, 0, 1.0, q)
+    for c in range(first, end):
+        share = pair_velocity(R, c, 0, q)
+        if table[c, GOAL] == table[c, GOAL] and share > 0.0:
+            table[c, ACC] = max((table[c, GOAL] - pair_velocity(R, c, 0, p)) / share, 0.0)
     gained = 0.0
+    for c in range(first, end):
+        d = table[c, ACC]
+        if d > 0.0:
+            u = pair_velocity(R, c, 0, p)
+            gained += d * (u + 0.5 * d / R[c, MASS_N])
+            p = pair_impulse(R, c, 0, d, p)
+    return p, gained
+
+
+@njit(cache=True)
+def _sweeps(R, first, end, p, table, gained):
+    """Projected Gauss–Seidel on the points' λ (module docstring), from the
+    pair's velocities p and λ in the table: (p after, the kinetic energy
+    the impulses gained, `gained` before them, Σ λ_i |g_i| for scale)."""
     for _ in range(BLOCK_SWEEPS if end - first > 1 else 1):
         change = total = 0.0
         for c in range(first, end):
@@ -135,7 +161,10 @@ def bounce_points(R, I, first, end, vel, omega, terms, target, tau, J, table):
     p = load_pair(vel, omega, a, b)
     if not _goals(R, first, end, p, terms, target, J, table):
         return 0
-    p, gained, scale = _sweeps(R, first, end, p, table)
+    gained = 0.0
+    if end - first > 1:
+        p, gained = _even_start(R, first, end, p, table)
+    p, gained, scale = _sweeps(R, first, end, p, table, gained)
     if end - first > 1 and gained > ENERGY_TOLERANCE * scale:
         return -1
     store_pair(vel, omega, a, b, p)
