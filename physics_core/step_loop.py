@@ -96,7 +96,8 @@ def run_steps(inputs, n, substeps, dt, code):
     parameters, sleep state, scratch counts), the warm cache's and the event
     log's typed lists, the contact stages' scratch store
     (collision/scratch.py), adaptive.adaptive_data's tuple (unused_adaptive()
-    for a fixed integrator) and the prof slots."""
+    for a fixed integrator) and the prof slots (their totals, then a copy of
+    the totals as they were when this call began)."""
     return _run(n, substeps, dt, code, inputs.idata, inputs.body,
                 inputs.loads, inputs.masses, inputs.work, inputs.contacts, inputs.warm_keys,
                 inputs.warm_values, inputs.event_ints, inputs.event_floats, inputs.event_counts,
@@ -113,6 +114,9 @@ def _run(n, substeps, dt, code, idata, body, loads, masses, work, contacts, warm
               lists[5])
     idata, body, loads, masses, work, adaptive, prof = borrow((idata, body, loads, masses, work,
                                                                adaptive, prof))
+    half = len(prof) // 2           # the slots' totals before this call, for last_step_profile
+    for i in range(half):
+        prof[half + i] = prof[i]
     for k in range(n):
         failed = _one_step(substeps, dt, code, idata, body, loads, masses, work, packed, adaptive,
                            prof)

@@ -114,3 +114,20 @@ def test_compiled_entry_falls_back_to_the_callable_without_numba_overloads():
     def plain(a, b):
         return a + b
     assert compiled_entry(plain, (1, 2.0)) is plain
+
+
+def test_substeps_set_between_steps_is_the_count_the_next_step_takes():
+    """Regression guard for a step call cached with its substep count: after
+    `world.substeps = 4`, one step of semi-implicit Euler from rest under g
+    falls g dt² (k + 1) / (2 k) (the sum of k substeps of h = dt / k:
+    g h² (1 + 2 + … + k)), not g dt² as with the one substep before."""
+    world = load_scene(scene(sphere("ball"), dt=DT, gravity="earth"))
+    g = g_of("earth")
+    world.step(1)
+    assert abs(-world.state.pos[0, 2] - g * DT * DT) < 1e-15
+    world.state.vel[:] = 0.0
+    world.state.pos[:] = 0.0
+    world.substeps = 4
+    world.step(1)
+    assert abs(-world.state.pos[0, 2] - g * DT * DT * 5.0 / 8.0) < 1e-15
+    assert abs(-world.state.vel[0, 2] - g * DT) < 1e-15

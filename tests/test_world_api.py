@@ -70,6 +70,26 @@ def test_profile_times_each_declared_stage():
     assert set(world.last_step_profile) >= {"integrate", "force:gravity", "force:drag", "finite"}
 
 
+def test_last_step_profile_is_the_last_calls_share_of_the_totals():
+    """last_step_profile × the call's steps is what that call added to the
+    cumulative profile, stage by stage (to rounding of the cycle-to-seconds
+    product): the first call from zero, the second from the first's totals,
+    including a contact scene's stages."""
+    ground = {"name": "ground", "shape": {"type": "plane"}, "static": True}
+    world = load_scene(scene(ground, sphere(position=(0.0, 0.0, 0.2)), gravity="earth",
+                             effects={"contacts": {}}))
+    world.step(3)
+    first, last = world.profile, world.last_step_profile
+    assert set(last) >= {"integrate", "collide", "solve", "finite"}
+    for stage, seconds in last.items():
+        assert seconds > 0.0 and abs(3 * seconds - first[stage]) <= 1e-12 * first[stage]
+    world.step(40)
+    second, last = world.profile, world.last_step_profile
+    for stage, seconds in last.items():
+        added = second[stage] - first[stage]
+        assert seconds > 0.0 and abs(40 * seconds - added) <= 1e-9 * second[stage]
+
+
 # ---- held forces and torques, one-shot impulses -------------------------------
 
 def test_force_is_held_until_replaced_and_zero_clears_it():
