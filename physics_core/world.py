@@ -57,7 +57,8 @@ class World(CommandsMixin, ReadingMixin):
         self._cycles = np.zeros(2 * (FORCES + N_EFFECTS), np.int64)
         self._last = None             # the last call's number of steps
         self._adaptive_stats = new_stats()   # adaptive.py's counters, kept across _build
-        self.last_step_seconds = 0.0
+        self._step_seconds = 0.0      # wall time inside world.step, cumulative
+        self._last_seconds = 0.0      # and of the last call
         self._build(model)
 
     def _build(self, model):
@@ -123,11 +124,9 @@ class World(CommandsMixin, ReadingMixin):
         s.step_index += done
         s.time = s.step_index * packed[4]
         self._contacts = None           # read from the event log when asked for
-        elapsed = perf_counter() - start
-        self._profile["step"] += elapsed
-        done = done or 1
-        self.last_step_seconds = elapsed / done
-        self._last = done
+        self._last_seconds = elapsed = perf_counter() - start
+        self._step_seconds += elapsed
+        self._last = done or 1
         if failed >= 0:
             self._raise_non_finite("integrate" if failed == FAILED_INTEGRATE else STAGE_NAMES[failed])
         return self
@@ -191,6 +190,11 @@ class World(CommandsMixin, ReadingMixin):
         self._contacts = events
 
     @property
+    def last_step_seconds(self):
+        """Wall seconds per step of the last world.step(n) call (its mean)."""
+        return self._last_seconds / self._last if self._last else 0.0
+
+    @property
     def last_step_profile(self):
         """Seconds per stage of one step of the last world.step(n) call (its mean)."""
         if self._last is None:
@@ -225,6 +229,7 @@ class World(CommandsMixin, ReadingMixin):
         """Seconds spent per stage since the World was made (cumulative)."""
         out = self._seconds(self._cycles)
         out.update(self._profile)
+        out["step"] = self._step_seconds
         return out
 
     def _raise_non_finite(self, stage):
