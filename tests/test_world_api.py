@@ -108,6 +108,23 @@ def test_force_is_held_until_replaced_and_zero_clears_it():
     assert np.array_equal(world.body("ball").velocity, v)
 
 
+def test_a_force_held_again_after_clear_loads_pushes_again():
+    """Regression guard for the step's cached load flags (world.step writes
+    them only when has_user_force / has_user_torque change): a force, then
+    clear_loads, then the same force again gives v = F t / m over the last
+    second only, and the same for a torque about a sphere's axis."""
+    world = load_scene(scene(sphere(mass=2.0, radius=0.5)))        # I = 0.2 kg m²
+    world.step(1)                     # the flags written once with nothing held
+    for _ in range(2):
+        world.apply_force("ball", [4.0, 0.0, 0.0])
+        world.apply_torque("ball", [0.0, 0.0, 0.2])
+        world.step(240)
+        world.clear_loads()
+        world.step(240)
+    assert world.body("ball").velocity[0] == pytest.approx(4.0, abs=1e-12)
+    assert world.body("ball").angular_velocity[2] == pytest.approx(2.0, abs=1e-12)
+
+
 def test_force_is_in_world_axes_whatever_the_body_orientation():
     world = load_scene(scene(box(orientation=[0.0, 0.0, 0.0, 1.0], mass=1.0)))   # turned 180° about z
     world.apply_force("box", [1.0, 0.0, 0.0])
