@@ -73,14 +73,22 @@ def _goals(R, first, end, p, terms, target, J, table):
     return some
 
 
+@njit(cache=True, inline="always")
+def _push(R, c, d, u, p, gained):
+    """Impulse d on point c (its velocity u before it) applied to the pair's
+    velocities p: (p after, `gained` plus the kinetic energy it adds,
+    d (u + ½ d W_cc))."""
+    return pair_impulse(R, c, 0, d, p), gained + d * (u + 0.5 * d / R[c, MASS_N])
+
+
 @njit(cache=True)
 def _even_start(R, first, end, p, table):
     """The sweeps' start for two or more points: λ_i = (g_i − u_i) / Σ_j W_ij
     over the bouncing points j (their velocity change for a unit impulse on
     each), the answer where every point needs the same share, as on a face
     landing flat (the sweeps from zero took about 60 sweeps there), and a
-    start otherwise. Applied in turn: (p after, the energy they gained,
-    dλ (u + ½ dλ W_ii) each)."""
+    start otherwise. Applied in turn (_push): (p after, the energy they
+    gained)."""
     q = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     for c in range(first, end):
         if table[c, GOAL] == table[c, GOAL]:
@@ -93,9 +101,7 @@ def _even_start(R, first, end, p, table):
     for c in range(first, end):
         d = table[c, ACC]
         if d > 0.0:
-            u = pair_velocity(R, c, 0, p)
-            gained += d * (u + 0.5 * d / R[c, MASS_N])
-            p = pair_impulse(R, c, 0, d, p)
+            p, gained = _push(R, c, d, pair_velocity(R, c, 0, p), p, gained)
     return p, gained
 
 
@@ -117,8 +123,7 @@ def _sweeps(R, first, end, p, table, gained):
                 new = 0.0
             d = new - old
             if d != 0.0:
-                gained += d * (u + 0.5 * d / R[c, MASS_N])
-                p = pair_impulse(R, c, 0, d, p)
+                p, gained = _push(R, c, d, u, p, gained)
                 table[c, ACC] = new
             change = max(change, abs(d))
             total += new
