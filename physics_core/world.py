@@ -115,7 +115,7 @@ class World(CommandsMixin, ReadingMixin):
             self._profile["impulses"] += perf_counter() - start
         packed = self._packed
         if packed is None or not same_arrays(packed[0], s):
-            packed = self._current_inputs()
+            packed = self._pack()
         held = self._held
         if s.has_user_force is not held[0] or s.has_user_torque is not held[1]:
             # written only when they change: two numpy item writes were
@@ -160,6 +160,10 @@ class World(CommandsMixin, ReadingMixin):
         packed = self._packed
         if packed is not None and same_arrays(packed[0], self.state):
             return packed
+        return self._pack()
+
+    def _pack(self):
+        """The step call's arguments packed anew (_current_inputs)."""
         s, cs = self.state, self.contact_system
         contacts, (warm_keys, warm_values), (ints, floats, counts), scratch = (
             cs.args() if cs is not None else _NO_CONTACTS)
