@@ -256,7 +256,9 @@ def _copy_row(T, k, T1, m):
 @njit(cache=True)
 def _one_sided(R, I, M, MI, layer, order, store):
     """Compact copies (R1, I1, M1, MI1) of the manifolds of `order`, in that
-    order, with the lower layer's side of every row immovable."""
+    order, with the lower layer's side of every row immovable. A single
+    point has no friction anchor (manifold_friction.py): its M1 row is left
+    unwritten, and _scatter_impulses does not read it."""
     rows = 0
     for k in order:
         rows += MI[k, COUNT]
@@ -267,7 +269,8 @@ def _one_sided(R, I, M, MI, layer, order, store):
     for m in range(len(order)):
         k = order[m]
         first, count = MI[k, FIRST], MI[k, COUNT]
-        _copy_row(M, k, M1, m)
+        if count >= 2:
+            _copy_row(M, k, M1, m)
         _copy_row(MI, k, MI1, m)
         MI1[m, FIRST] = r
         side = 0 if layer[I[first, BODY_A]] < layer[I[first, BODY_B]] else 1
@@ -324,14 +327,14 @@ def _counting_order(items, key, limit, store):
 @njit(cache=True)
 def _lever(R, first, count):
     """The longest lever arm |r × d| of the manifold's rows (m): a change Δω of
-    either body moves a contact point by at most |Δω| times it."""
-    lever = 0.0
+    either body moves a contact point by at most |Δω| times it. One square
+    root, of the largest |r × d|² (a correctly rounded root keeps the order)."""
+    lever2 = 0.0
     for c in range(first, first + count):
         for o in range(0, 9, 3):
             for arm in (ARM_A + o, ARM_B + o):
-                lever = max(lever, math.sqrt(R[c, arm] ** 2 + R[c, arm + 1] ** 2
-                                             + R[c, arm + 2] ** 2))
-    return lever
+                lever2 = max(lever2, R[c, arm] ** 2 + R[c, arm + 1] ** 2 + R[c, arm + 2] ** 2)
+    return math.sqrt(lever2)
 
 
 @njit(cache=True, inline="always")
@@ -422,6 +425,8 @@ def _scatter_impulses(R, M, MI, order, R1, M1, MI1, kept):
         for j in range(MI[k, COUNT]):
             for r in range(3):
                 R[MI[k, FIRST] + j, LAM + r] = R1[MI1[m, FIRST] + j, LAM + r]
+        if MI[k, COUNT] < 2:
+            continue                     # no anchor (_one_sided)
         for r in range(3):
             M[k, M_LAM + r] = M1[m, M_LAM + r]
 
