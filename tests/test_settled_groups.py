@@ -9,6 +9,7 @@ computed again for the contacts of the bodies the sweep may have moved
 (swept_bodies) equal those computed again for every contact.
 """
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -99,7 +100,7 @@ def _swept(extra, steps):
     cs = w.contact_system
     limit = cs.fp[VELOCITY_TOLERANCE] * least_mass(R)
     changes = np.empty(len(MI))
-    solve_velocities(R, I, M, MI, vel, omega, cs.ip[ITERATIONS], limit, changes)
+    solve_velocities(R, I, M, MI, vel, omega, cs.ip[ITERATIONS], (limit, SETTLE * limit), changes)
     return w, R, I, M, MI, vel, omega, quat, store, changes, SETTLE * limit
 
 
@@ -138,3 +139,51 @@ def test_friction_after_the_sweep_is_the_same_computed_for_the_swept_bodies_alon
     friction_and_slip(R, I, vel, omega, every_f, every_s)
     friction_and_slip_of(R, I, vel, omega, friction, slip, swept)
     assert np.array_equal(friction, every_f) and np.array_equal(slip, every_s)
+
+
+@pytest.mark.parametrize("change, before, left, goes_on", [
+    (1e-5, 1e-3, 1, True),         # rate 0.01: 1e-7 after one more sweep, under 1e-6
+    (1e-5, 1e-3, 0, False),        # no sweep left
+    (1e-5, 2e-5, 3, False),        # rate 0.5: 1.25e-6 after three, not under
+    (1e-5, 2e-5, 4, True),         # 6.25e-7 after four
+    (5e-7, 1e-3, 4, False),        # under the bound already
+    (1e-5, 1e-5, 7, False),        # not shrinking
+    (np.nan, 1e-3, 7, False),      # NaN: the caller's stop test fails first
+])
+def test_sweeps_go_on_only_when_their_rate_reaches_the_settle_bound_in_the_sweeps_left(
+        change, before, left, goes_on):
+    """sequential_impulses._settling against its closed form: the change
+    times (change / before) ** left under the bound (1e-6 here)."""
+    from physics_core.collision.sequential_impulses import _settling
+    assert _settling(change, before, 1e-6, left) is goes_on
+
+
+def _pyramid_of_three():
+    return load_scene({"dt": DT, "gravity": "earth", "effects": {"contacts": {"sleep": False}},
+                       "bodies": [{"name": "floor", "shape": {"type": "plane"}, "static": True},
+                                  _cube("left", -0.101, 0.1), _cube("right", 0.101, 0.1),
+                                  _cube("top", 0.0, 0.301)]})
+
+
+def test_a_resting_pyramids_sweeps_go_on_to_where_the_shock_sweep_leaves_it_out():
+    """Three cubes at rest (two on the floor, one across them): stopped at the
+    velocity tolerance the sweeps leave some manifold above the shock
+    sweep's bound, so the sweep runs on the whole pyramid every substep;
+    converging fast, they go on under it (solve_stage's stops) and the
+    pyramid is left out, within the `iterations` the scene allows."""
+    w = _pyramid_of_three()
+    w.step(240)
+    cs = w.contact_system
+    ends = {}
+    for stops in ("tolerance", "settle"):
+        R, I, M, MI, vel, omega, quat, store = rows_before_solve(w, DT)
+        limit = cs.fp[VELOCITY_TOLERANCE] * least_mass(R)
+        changes = np.empty(len(MI))
+        sweeps, _ = solve_velocities(R, I, M, MI, vel, omega, cs.ip[ITERATIONS],
+                                     (limit, limit if stops == "tolerance" else SETTLE * limit),
+                                     changes)
+        ends[stops] = (sweeps, changes.max(), SETTLE * limit)
+    sweeps, change, bound = ends["tolerance"]
+    assert change >= bound
+    sweeps_settled, change_settled, _ = ends["settle"]
+    assert change_settled < bound and sweeps < sweeps_settled <= cs.ip[ITERATIONS]

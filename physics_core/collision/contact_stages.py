@@ -27,7 +27,7 @@ from .push_out import correct
 from .scratch import take, take_bools, take_int_rows, take_ints, take_rows
 from .sequential_impulses import (friction_and_slip, friction_and_slip_of, least_mass,
                                   solve_velocities, warm_start)
-from .shock_propagation import shock_sweep, swept_bodies
+from .shock_propagation import holds_something, shock_sweep, swept_bodies
 from .sleep_islands import _sync, _update, _wake_touched
 from .time_of_impact import rewind_fast_bodies
 from .warm_cache import warm_clear, warm_load, warm_store
@@ -147,7 +147,12 @@ def solve_stage(fp, ip, R, I, M, MI, key, vel, omega, warm, J, masses, store):
     # an impulse change dλ moves a row's relative velocity by about dλ / m_eff
     limit = fp[VELOCITY_TOLERANCE] * least_mass(R) if fp[VELOCITY_TOLERANCE] > 0.0 else -1.0
     changes = take(store, len(MI))
-    sweeps, _ = solve_velocities(R, I, M, MI, vel, omega, ip[ITERATIONS], limit, changes)
+    # where the shock sweep will run, sweeps converging fast go on to where
+    # it leaves their group out (SETTLE of the stop, below); with nothing
+    # immovable it visits nothing, and the sweeps stop as with it off
+    shock = ip[SHOCK_ON] and holds_something(R)
+    stops = (limit, SETTLE * limit if shock else limit)
+    sweeps, _ = solve_velocities(R, I, M, MI, vel, omega, ip[ITERATIONS], stops, changes)
     friction, slip = take_rows(store, len(R), 3), take(store, len(R))
     friction_and_slip(R, I, vel, omega, friction, slip)
     anchor_friction_out(R, M, MI, friction)

@@ -153,19 +153,37 @@ def sweep_manifolds(R, I, M, MI, vel, omega, changes):
 
 
 @njit(cache=True)
-def solve_velocities(R, I, M, MI, vel, omega, iterations, limit, changes):
+def solve_velocities(R, I, M, MI, vel, omega, iterations, stops, changes):
     """At most `iterations` sweeps over every manifold; stops after a sweep
-    that changed no impulse by more than `limit` (N·s; < 0: never). A NaN
-    change never stops early. Returns (sweeps done, the last sweep's largest
-    impulse change; NaN if one was); changes[k] is manifold k's largest
-    change in that last sweep (the shock sweep leaves out what converged)."""
+    that changed no impulse by more than `limit` (N·s; < 0: never), stops =
+    (limit, settle), unless the sweeps converge fast enough to reach
+    `settle` (≤ limit) in the sweeps left (_settling): they then go on to
+    it, and a group of bodies settled that far is left out of the shock
+    sweep (shock_propagation.leave_out_settled), whose tables cost several
+    sweeps. A NaN change never stops early. Returns (sweeps done, the last
+    sweep's largest impulse change; NaN if one was); changes[k] is manifold
+    k's largest change in that last sweep."""
+    limit, settle = stops
     change = math.inf
     changes[:] = math.inf
     for sweep in range(iterations):
+        before = change
         change = sweep_manifolds(R, I, M, MI, vel, omega, changes)
-        if limit > 0.0 and change < limit:
+        if limit > 0.0 and change < limit and not _settling(change, before, settle,
+                                                            iterations - sweep - 1):
             return sweep + 1, change
     return iterations, change
+
+
+@njit(cache=True, inline="always")
+def _settling(change, before, settle, left):
+    """Whether sweeps that keep shrinking the change at this sweep's rate
+    (change / before) get it under `settle` within `left` more sweeps,
+    and have not yet."""
+    if not change >= settle:
+        return False
+    rate = change / before
+    return rate < 1.0 and change * rate ** left < settle
 
 
 @njit(cache=True, inline="always")

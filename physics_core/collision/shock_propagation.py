@@ -127,6 +127,16 @@ def support_layers(R, I, n, store):
     return layer, (start, other)
 
 
+@njit(cache=True)
+def holds_something(R):
+    """Whether some contact has an immovable side (zero inverse mass): without
+    one the sweep has no layer to start from and visits nothing."""
+    for c in range(len(R)):
+        if R[c, INV_MASS_A] == 0.0 or R[c, INV_MASS_B] == 0.0:
+            return True
+    return False
+
+
 @njit(cache=True, inline="always")
 def _unsettled_count(MI, unsettled):
     """How many manifolds' last sweep changed an impulse by `bound` or more (or NaN)."""
