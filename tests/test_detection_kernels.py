@@ -275,7 +275,6 @@ def test_dense_clusters_far_apart_give_the_numpy_pairs(seed, clusters, per, marg
     assert np.array_equal(pairs[:, 0], a) and np.array_equal(pairs[:, 1], b)
 
 
-
 @settings(max_examples=300, deadline=None)
 @given(values=st.lists(st.one_of(st.floats(0.0, 1e3), st.sampled_from([0.2, 0.4, 0.2000000001])),
                        min_size=1, max_size=300))

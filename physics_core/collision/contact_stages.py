@@ -147,11 +147,13 @@ def solve_stage(fp, ip, R, I, M, MI, key, vel, omega, warm, J, masses, store):
     # an impulse change dλ moves a row's relative velocity by about dλ / m_eff
     limit = fp[VELOCITY_TOLERANCE] * least_mass(R) if fp[VELOCITY_TOLERANCE] > 0.0 else -1.0
     changes = take(store, len(MI))
-    # where the shock sweep will run, sweeps converging fast go on to where
-    # it leaves their group out (SETTLE of the stop, below); with nothing
-    # immovable it visits nothing, and the sweeps stop as with it off
+    # the shock sweep leaves out a group whose manifolds all changed by less
+    # than `left_out` in the last sweep (below); where it will run, sweeps
+    # converging fast go on to that bound. With nothing immovable it visits
+    # nothing, and the sweeps stop as with it off
+    left_out = SETTLE * limit
     shock = ip[SHOCK_ON] and holds_something(R)
-    stops = (limit, SETTLE * limit if shock else limit)
+    stops = (limit, left_out if shock else limit)
     sweeps, _ = solve_velocities(R, I, M, MI, vel, omega, ip[ITERATIONS], stops, changes)
     friction, slip = take_rows(store, len(R), 3), take(store, len(R))
     friction_and_slip(R, I, vel, omega, friction, slip)
@@ -167,7 +169,7 @@ def solve_stage(fp, ip, R, I, M, MI, key, vel, omega, warm, J, masses, store):
     settle = SETTLE * fp[VELOCITY_TOLERANCE]
     if ip[SHOCK_ON]:
         visited, layer = shock_sweep(R, I, M, MI, vel, omega, len(vel), ip[SHOCK_ON], settle,
-                                     masses, ip[RESTING_BLOCK] != 0, (changes, SETTLE * limit),
+                                     masses, ip[RESTING_BLOCK] != 0, (changes, left_out),
                                      store)
         if visited:
             friction_and_slip_of(R, I, vel, omega, friction, slip, swept_bodies(layer, store))

@@ -179,7 +179,8 @@ def solve_velocities(R, I, M, MI, vel, omega, iterations, stops, changes):
 def _settling(change, before, settle, left):
     """Whether sweeps that keep shrinking the change at this sweep's rate
     (change / before) get it under `settle` within `left` more sweeps,
-    and have not yet."""
+    and have not yet. After the first sweep (before = inf, rate 0) one more
+    sweep is taken, if any is left, to measure the rate."""
     if not change >= settle:
         return False
     rate = change / before
