@@ -54,10 +54,11 @@ def smallest_half_size(kind, dims, i):
     return math.inf
 
 
-@njit(cache=True)
-def turn_angle(q0, q1):
-    """Angle (rad) of the rotation taking orientation q0 to q1."""
-    c = abs(q0[0] * q1[0] + q0[1] * q1[1] + q0[2] * q1[2] + q0[3] * q1[3])
+@njit(cache=True, inline="always")
+def turn_angle(q0, q1, i):
+    """Angle (rad) of the rotation taking orientation q0[i] to q1[i] (read
+    as scalars: a row view a body costs reference counts)."""
+    c = abs(q0[i, 0] * q1[i, 0] + q0[i, 1] * q1[i, 1] + q0[i, 2] * q1[i, 2] + q0[i, 3] * q1[i, 3])
     return 2.0 * math.acos(min(c, 1.0))
 
 
@@ -67,7 +68,7 @@ def sweep(kind, reach, i, p0, q0, pos, quat):
     d = math.sqrt((pos[i, 0] - p0[i, 0]) ** 2 + (pos[i, 1] - p0[i, 1]) ** 2
                   + (pos[i, 2] - p0[i, 2]) ** 2)
     if kind[i] == BOX:
-        d += reach[i] * turn_angle(q0[i], quat[i])
+        d += reach[i] * turn_angle(q0, quat, i)
     return d
 
 
@@ -80,11 +81,12 @@ def fast_bodies(kind, dims, reach, moving, p0, q0, pos, quat, threshold):
 
 @njit(cache=True)
 def mark_fast(kind, dims, reach, moving, p0, q0, pos, quat, threshold, fast):
-    """fast_bodies into `fast` (n,)."""
-    fast[:] = False
+    """fast_bodies into `fast` (n,). Every body's sweep is computed (the
+    poses are finite) and the tests are joined by `&`, not branched on: 2.9
+    against 51 ns a sphere when it was a branch on moving and kind."""
     for i in range(len(pos)):
-        if moving[i] and kind[i] != PLANE:
-            fast[i] = sweep(kind, reach, i, p0, q0, pos, quat) > threshold * smallest_half_size(kind, dims, i)
+        fast[i] = (moving[i] & (kind[i] != PLANE)
+                   & (sweep(kind, reach, i, p0, q0, pos, quat) > threshold * smallest_half_size(kind, dims, i)))
     return fast
 
 
@@ -218,7 +220,7 @@ def sample_count(kind, dims, reach, i, j, p0, q0, pos, quat):
     rot = 0.0
     for b in (i, j):
         if kind[b] == BOX:
-            rot += reach[b] * turn_angle(q0[b], quat[b])
+            rot += reach[b] * turn_angle(q0, quat, b)
     if kind[i] == PLANE:      # a half-space: only a turning corner dips in and out
         rel, spacing = 0.0, SAMPLE_SPACING * smallest_half_size(kind, dims, j)
     else:
