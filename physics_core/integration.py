@@ -255,7 +255,9 @@ def spins(omega):
     return False
 
 
-@njit(cache=True)
+# Inlined in the step loop (step_loop._integrate): a call passed the data
+# tuple's arrays (every effect's constants) field by field once per substep
+@njit(cache=True, inline="always")
 def integrate_substep(code, h, data, pos, quat, vel, omega, inv_mass, inertia, inv_inertia,
                       user_force, user_force_offset, user_torque, has_user_force, has_user_torque,
                       model_torque, work, prof):
