@@ -104,7 +104,7 @@ class World(CommandsMixin, ReadingMixin):
         """n fixed steps (one compiled loop); raises NonFiniteStateError if a
         stage leaves a NaN or inf, after the steps before it. The Python
         around the compiled call is kept to what each call needs (about
-        0.6–0.85 µs; a resting ball's whole step is about 3.2 µs)."""
+        0.6–0.85 µs; a resting ball's whole step is about 2.9–3.0 µs)."""
         n = int(n)
         if n <= 0:
             return self

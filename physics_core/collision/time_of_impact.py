@@ -82,8 +82,9 @@ def fast_bodies(kind, dims, reach, moving, p0, q0, pos, quat, threshold):
 @njit(cache=True)
 def mark_fast(kind, dims, reach, moving, p0, q0, pos, quat, threshold, fast):
     """fast_bodies into `fast` (n,). Every body's sweep is computed (the
-    poses are finite) and the tests are joined by `&`, not branched on: 2.9
-    against 51 ns a sphere when it was a branch on moving and kind."""
+    poses are finite) and the tests are joined by `&`, not branched on
+    moving and kind: in the step, the ccd stage of 10,000 falling spheres
+    went from 110 to 90 µs."""
     for i in range(len(pos)):
         fast[i] = (moving[i] & (kind[i] != PLANE)
                    & (sweep(kind, reach, i, p0, q0, pos, quat) > threshold * smallest_half_size(kind, dims, i)))
