@@ -9,18 +9,18 @@ from numba import njit
 from .command_limits import STATE_LIMIT
 
 
-@njit(cache=True)
-def _row_finite(a, i):
-    for j in range(a.shape[1]):
-        if not abs(a[i, j]) <= STATE_LIMIT:   # False for NaN as well as for ±inf
-            return False
-    return True
-
-
 @njit(cache=True, inline="always")
 def _outside(x):
     """Whether x is NaN, ±inf or beyond STATE_LIMIT (abs(NaN) <= STATE_LIMIT is False)."""
     return not (abs(x) <= STATE_LIMIT)
+
+
+@njit(cache=True)
+def _row_finite(a, i):
+    for j in range(a.shape[1]):
+        if _outside(a[i, j]):
+            return False
+    return True
 
 
 @njit(cache=True, inline="always")
