@@ -39,6 +39,9 @@ from .contact_layout import ARM_A, ARM_B, BIAS, BODY_A, BODY_B, DIR, INV_MASS_A,
 from .manifold_friction import AA, AB, COUNT, FIRST, L, M_LAM, M_MU_S, M_SLIDING, RADIUS
 from .pair_velocity import load_pair, pair_impulse, store_pair
 
+# The steps of settle_resting are inlined into it (inline="always"): a call
+# passes the workspace and the row tables field by field, and a solve makes
+# about a dozen such calls (the pyramid of 100: step 0.95x with them inlined)
 MANIFOLDS = 4         # a body's manifolds solved together at most
 ROWS = 7 * MANIFOLDS  # four normal rows and an anchor's three each
 SINGULAR = 1e-12      # a Cholesky pivot below this × the largest diagonal: JᵀJ is singular
@@ -50,7 +53,7 @@ WS_SHAPE = (ROWS + 10, ROWS)   # the workspace: J (rows 0..ROWS-1, 6 columns), J
                                # (FAC..FAC+5), t − u then x (VEC), Δq (DQ), z (NUL), scratch (TMP)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _manifold_rows(R1, I1, M1, MI1, m, vel, omega, upper_is_b, ws, j):
     """J and t − u of manifold m's rows from row j of the workspace; the next row."""
     first, count = MI1[m, FIRST], MI1[m, COUNT]
@@ -72,7 +75,7 @@ def _manifold_rows(R1, I1, M1, MI1, m, vel, omega, upper_is_b, ws, j):
     return j
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _factor(ws, k):
     """JᵀJ of the k rows into ws[FAC:FAC + 6], Cholesky-factored in place
     (lower); False when a pivot is not clearly positive (the rows do not fix
@@ -100,7 +103,7 @@ def _factor(ws, k):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _solve(ws, y):
     """y (6,) ← (JᵀJ)⁻¹ y with the factor in ws[FAC:FAC + 6]."""
     for p in range(6):
@@ -115,7 +118,7 @@ def _solve(ws, y):
         y[p] = s / ws[FAC + p, p]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _velocity_change(ws, k, tolerance):
     """Δq = (JᵀJ)⁻¹ Jᵀ (t − u) into ws[DQ, :6]; False if it leaves some
     condition unmet by more than `tolerance` (m/s: the supports part)."""
@@ -135,7 +138,7 @@ def _velocity_change(ws, k, tolerance):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _momentum(ws, body, masses):
     """ws[DQ, :6] ← M Δq: m Δv and I_w Δω (I_w = R diag(I) Rᵀ, COURSE.md 3);
     False if the body has an infinite mass or moment."""
@@ -155,7 +158,7 @@ def _momentum(ws, body, masses):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _impulses(ws, k):
     """x = J (JᵀJ)⁻¹ M Δq into ws[VEC, :k] (M Δq in ws[DQ, :6], overwritten)."""
     y = ws[DQ]
@@ -221,7 +224,7 @@ def _push_everywhere(R1, first, count, ws, k):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _holds(R1, M1, MI1, m, ws, j):
     """Manifold m's points (workspace rows from j) still push and its friction
     holds after the impulses ws[VEC]."""
@@ -239,7 +242,7 @@ def _holds(R1, M1, MI1, m, ws, j):
     return t0 * t0 + t1 * t1 <= lim * lim and abs(twist) <= lim * M1[m, RADIUS]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _all_hold(R1, M1, MI1, ms, ws):
     j = 0
     for m in ms:
@@ -249,7 +252,7 @@ def _all_hold(R1, M1, MI1, ms, ws):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _apply(R1, I1, M1, MI1, ms, vel, omega, ws):
     """The impulses ws[VEC] along the manifolds' rows, added to their λ."""
     j = 0
@@ -268,7 +271,7 @@ def _apply(R1, I1, M1, MI1, ms, vel, omega, ws):
         store_pair(vel, omega, a, b, p)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _upper_side(R1, I1, MI1, m):
     """(the movable body, whether it is side b) of manifold m if it may take
     part: two points or more, static friction, one side frozen and the
@@ -282,7 +285,7 @@ def _upper_side(R1, I1, MI1, m):
     return (I1[first, BODY_B] if upper_is_b else I1[first, BODY_A]), upper_is_b
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _rows(one_sided, ms, vel, omega, ws):
     """(body, row count) of the manifolds ms of one body, their rows in the
     workspace; body -1 when one of them may not take part."""

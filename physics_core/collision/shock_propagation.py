@@ -209,7 +209,7 @@ def _plus_zero(x):
     return x == 0.0 and math.copysign(1.0, x) > 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _held(T, k, inv_mass, turn):
     """Whether entry k of a row table has that side immovable already: its
     inverse mass and the nine I_w⁻¹ (r × d_r) all exactly +0.0, as freezing
@@ -223,7 +223,7 @@ def _held(T, k, inv_mass, turn):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _make_immovable(T, k, inv_mass, turn):
     """Entry k's side (its inverse-mass column, its nine turn columns) set to
     +0.0; False, with nothing written, when it was so already (_held)."""
@@ -235,7 +235,7 @@ def _make_immovable(T, k, inv_mass, turn):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _freeze_row(R, c, side, anchored):
     """Row c with body `side` (0: a, 1: b) immovable: no impulse reaches it.
     The row of an anchored manifold (its friction is the anchor's) gets its
@@ -249,7 +249,7 @@ def _freeze_row(R, c, side, anchored):
         effective_masses(R, c)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _freeze_anchor(M, k, side, w):
     inv_mass, turn = (IMA, TA) if side == 0 else (IMB, TB)
     if _make_immovable(M, k, inv_mass, turn):
@@ -334,7 +334,7 @@ def _counting_order(items, key, limit, store):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _lever(R, first, count):
     """The longest lever arm |r × d| of the manifold's rows (m): a change Δω of
     either body moves a contact point by at most |Δω| times it. One square
@@ -505,7 +505,7 @@ def _settle_resting(one_sided, g, e, vel, omega, layer, masses, moved, clock, to
     return solved
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _body_manifolds(MI1, I1, m, e, layer, body, count, ms):
     """ms[:k] ← manifold m and the `count` − 1 after it (up to e) whose upper
     body is `body`; k, or 0 when they cannot be solved together (more than
