@@ -59,7 +59,7 @@ def _run(I, c):
     return first, end
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _goals(R, first, end, p, terms, target, J, table):
     """Each point's goal (NaN: it does not bounce), C_R × approach and τ into
     the table, its λ to 0; whether some point bounces."""
@@ -81,7 +81,7 @@ def _push(R, c, d, u, p, gained):
     return pair_impulse(R, c, 0, d, p), gained + d * (u + 0.5 * d / R[c, MASS_N])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _even_start(R, first, end, p, table):
     """The sweeps' start for two or more points: λ_i = (g_i − u_i) / Σ_j W_ij
     over the bouncing points j (their velocity change for a unit impulse on
@@ -105,7 +105,7 @@ def _even_start(R, first, end, p, table):
     return p, gained
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _sweeps(R, first, end, p, table, gained):
     """Projected Gauss–Seidel on the points' λ (module docstring), from the
     pair's velocities p and λ in the table: (p after, the kinetic energy
@@ -136,7 +136,7 @@ def _sweeps(R, first, end, p, table, gained):
     return p, gained, scale
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _record(R, I, first, end, vel, omega, target, tau, J, table):
     """Friction on each point's λ, the impulses into J and the first bounce's
     target and τ; the number of points that bounced."""
@@ -157,7 +157,7 @@ def _record(R, I, first, end, vel, omega, target, tau, J, table):
     return count
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def bounce_points(R, I, first, end, vel, omega, terms, target, tau, J, table):
     """The bounce of rows first..end − 1, one body pair's points, together
     (module docstring); the number of points that bounced, or −1 when the
@@ -176,7 +176,7 @@ def bounce_points(R, I, first, end, vel, omega, terms, target, tau, J, table):
     return _record(R, I, first, end, vel, omega, target, tau, J, table)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _one_by_one(R, I, first, end, vel, omega, terms, target, tau, J, table):
     """The bounces of rows first..end − 1 each alone (bounce_points on one row)."""
     got = 0
@@ -185,7 +185,7 @@ def _one_by_one(R, I, first, end, vel, omega, terms, target, tau, J, table):
     return got
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _bounce_pair(R, I, first, end, vel, omega, terms, target, tau, J, table):
     """One pair's bounce, its points together, or one by one if that gained energy."""
     got = bounce_points(R, I, first, end, vel, omega, terms, target, tau, J, table)

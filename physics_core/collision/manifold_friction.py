@@ -71,7 +71,7 @@ def manifold_ranges(I, store):
     return MI
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _centre(point, first, count):
     """Centroid of the manifold's points and their mean distance from it."""
     cx = cy = cz = 0.0
@@ -87,7 +87,7 @@ def _centre(point, first, count):
     return cx, cy, cz, rbar / count
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _shift(R, I, first, count, toi, h):
     """The mean of the points' touch shifts (contact_build.touch_shift)."""
     s = 0.0
@@ -97,7 +97,7 @@ def _shift(R, I, first, count, toi, h):
     return s / count
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _body_parts(M, k, ang, turn, normal, rx, ry, rz, iw, body):
     """Angular parts of one body for the three rows: r × t1, r × t2, n
     (iw[body]: its I_w⁻¹, row-major)."""
@@ -114,7 +114,7 @@ def _body_parts(M, k, ang, turn, normal, rx, ry, rz, iw, body):
             M[k, o + i] = iw[body, 3 * i] * cx + iw[body, 3 * i + 1] * cy + iw[body, 3 * i + 2] * cz
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _coupling(M, k, r, s):
     ll = 0.0
     wa = 0.0
@@ -126,7 +126,7 @@ def _coupling(M, k, r, s):
     return (M[k, IMA] + M[k, IMB]) * ll + wa + wb
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _invert(M, k, w):
     """W⁻¹ of manifold k (adjugate over determinant; W is symmetric positive);
     w: (3, 3) scratch."""

@@ -377,7 +377,7 @@ def _update(R1, I1, M1, MI1, m, vel, omega, lever, tolerance, moved, clock):
     return max(da, db)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _sweep(one_sided, start, stop, vel, omega, levers, tolerance, moved, clock, every):
     """One sweep (number `clock`) over manifolds start..stop: all of them if
     `every`, else those with a body that moved in the sweep before or this
@@ -441,7 +441,7 @@ def _scatter_impulses(R, M, MI, order, R1, M1, MI1, kept):
             M[k, M_LAM + r] = M1[m, M_LAM + r]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _kinetic_energy(bodies, vel, omega, masses):
     """Σ ½ m |v|² + ½ ω·I ω over `bodies` (COURSE.md 3; masses = (1/m,
     body-frame diagonal I⁻¹, orientations); 1/m = 0: immovable, no energy)."""
@@ -457,7 +457,7 @@ def _kinetic_energy(bodies, vel, omega, masses):
     return e
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _upper_bodies(I1, MI1, layer, g, e, mark, store):
     """The bodies of the higher layer of manifolds g..e, each once (mark: (n,)
     False on entry and on return)."""
