@@ -41,7 +41,8 @@ from .pair_velocity import load_pair, pair_impulse, store_pair
 
 # The steps of settle_resting are inlined into it (inline="always"): a call
 # passes the workspace and the row tables field by field, and a solve makes
-# about a dozen such calls (the pyramid of 100: step 0.95x with them inlined)
+# about a dozen such calls (inlined together with the shock sweep's row
+# freezing: the pyramid of 100's step 0.95x)
 MANIFOLDS = 4         # a body's manifolds solved together at most
 ROWS = 7 * MANIFOLDS  # four normal rows and an anchor's three each
 SINGULAR = 1e-12      # a Cholesky pivot below this × the largest diagonal: JᵀJ is singular
