@@ -41,8 +41,12 @@ $(IFACE_STAMP): $(STAMP) $(IFACE_FILES)
 run: install
 	$(VENV)/bin/physics-node --record recordings/session-$$(date +%Y%m%d-%H%M%S).mcap $(ARGS)
 
+# The tests run in one worker per core (pytest-xdist): most of their time is
+# waiting on node processes and compiled steps that do not share a core.
+TEST_WORKERS ?= auto
+
 test: install
-	$(PY) -m pytest -q tests $(PYTEST_ARGS)
+	$(PY) -m pytest -q -n $(TEST_WORKERS) tests $(PYTEST_ARGS)
 
 bench: install
 	$(VENV)/bin/physics-bench all

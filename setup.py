@@ -31,7 +31,7 @@ setup(
             "ros-jazzy-ament-cmake-gtest", "ros-jazzy-ament-cmake-gmock", "ros-jazzy-ament-cmake-pytest",
             "ros-jazzy-python-cmake-module", "catkin_pkg",
         ],
-        "test": ["pytest>=7", "hypothesis>=6", "radon>=6", "rosbags>=0.10", "websockets>=12", "protobuf>=4"],
+        "test": ["pytest>=7", "pytest-xdist>=3", "hypothesis>=6", "radon>=6", "rosbags>=0.10", "websockets>=12", "protobuf>=4"],
         "bench": ["matplotlib>=3.7"],
         # physics-render: matplotlib draws, Pillow writes GIF/PNG, imageio + its ffmpeg binary write MP4.
         "render": ["matplotlib>=3.7", "pillow>=9", "imageio>=2.30", "imageio-ffmpeg>=0.4.9"],
