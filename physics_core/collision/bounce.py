@@ -21,7 +21,9 @@ linearly from 0 over that band above the threshold.
 The pass's impulses J (normal, two tangents) are kept apart from the
 solve's accumulated λ, which they would otherwise cancel (the solve drives
 a separating contact's λ back to 0), and added to λ after the solve for the
-events and the sleep islands; the warm start uses the solve's λ only.
+events and the sleep islands; the warm start uses the solve's λ only, and
+is applied after the pass (contact_stages.restitution_stage): an approach
+is the bodies' own, not last substep's impulses applied again.
 
 Time of collision (COURSE.md 5): the surfaces met a fraction τ of the
 substep in, where s0 = approach·h − depth had closed; the bodies move with
