@@ -43,10 +43,13 @@ run: install
 
 # The tests run in one worker per core (pytest-xdist): most of their time is
 # waiting on node processes and compiled steps that do not share a core.
+# A file's tests stay together and in order on one worker (--dist loadfile):
+# the node tests of a file share one node process (a module fixture), and
+# some read what an earlier test of the file did to it.
 TEST_WORKERS ?= auto
 
 test: install
-	$(PY) -m pytest -q -n $(TEST_WORKERS) tests $(PYTEST_ARGS)
+	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadfile tests $(PYTEST_ARGS)
 
 bench: install
 	$(VENV)/bin/physics-bench all
