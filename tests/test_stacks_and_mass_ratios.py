@@ -27,6 +27,17 @@ def world(bodies, **contacts):
                        "bodies": [FLOOR] + bodies})
 
 
+def pyramid(n):
+    """benchmarks/pyramid.py's wall of n 20 cm boxes, 2 mm apart, on the ground
+    (default materials, sleep off)."""
+    from benchmarks.pyramid import boxes
+    bodies = [{"name": f"b{i}", "shape": {"type": "box", "half_extents": list(half)},
+               "mass": 1.0, "position": list(p)} for i, (_, half, p) in enumerate(boxes(n))]
+    return load_scene({"dt": 1 / 240, "gravity": [0, 0, -9.81],
+                       "effects": {"contacts": {"sleep": False}},
+                       "bodies": [{"name": "ground", "shape": {"type": "plane"}, "static": True}] + bodies})
+
+
 def twenty_stack(**contacts):
     return world([box(f"b{i}", 0.1 + 0.2 * i) for i in range(20)], **contacts)
 
@@ -113,12 +124,7 @@ def test_pyramid_of_300_boxes_keeps_its_top_box_instead_of_throwing_it():
     (1,000 boxes: 7 m). A layer whose settle raises its kinetic energy is
     now undone. Bounds: the top box ends within 0.1 m of its start (the
     rows settle 24 × 2 mm = 48 mm) and no box rises 1 cm above its start."""
-    from benchmarks.pyramid import boxes
-    bodies = [{"name": f"b{i}", "shape": {"type": "box", "half_extents": list(half)},
-               "mass": 1.0, "position": list(p)} for i, (_, half, p) in enumerate(boxes(300))]
-    w = load_scene({"dt": 1 / 240, "gravity": [0, 0, -9.81],
-                    "effects": {"contacts": {"sleep": False}},
-                    "bodies": [{"name": "ground", "shape": {"type": "plane"}, "static": True}] + bodies})
+    w = pyramid(300)
     p0 = w.state.pos.copy()
     top = int(np.argmax(p0[:, 2]))
     for _ in range(6):
@@ -138,12 +144,7 @@ def test_pyramids_stand_still_now_the_warm_start_is_not_taken_for_an_impact(n):
     boxes and 0.41 mm for 300, constant from the first second on. Bound:
     no box moves 1 mm sideways in 2 s (the rows only settle down, by 2 mm
     each)."""
-    from benchmarks.pyramid import boxes
-    bodies = [{"name": f"b{i}", "shape": {"type": "box", "half_extents": list(half)},
-               "mass": 1.0, "position": list(p)} for i, (_, half, p) in enumerate(boxes(n))]
-    w = load_scene({"dt": 1 / 240, "gravity": [0, 0, -9.81],
-                    "effects": {"contacts": {"sleep": False}},
-                    "bodies": [{"name": "ground", "shape": {"type": "plane"}, "static": True}] + bodies})
+    w = pyramid(n)
     p0 = w.state.pos.copy()
     for _ in range(4):
         w.step(120)
