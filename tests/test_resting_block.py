@@ -44,7 +44,8 @@ def one_sided_manifolds(w):
     sweeps, then the layers' one-sided copies (as contact_substep builds them)."""
     R, I, M, MI, vel, omega, quat, store = rows_before_solve(w, DT)
     ip = w.contact_system.ip
-    solve_velocities(R, I, M, MI, vel, omega, ip[CS.ITERATIONS], (-1.0, -1.0), np.empty(len(MI)))
+    solve_velocities(R, I, M, MI, vel, omega, ip[CS.ITERATIONS], (-1.0, -1.0, np.inf),
+                     np.empty(len(MI)))
     store[1][CURSOR] = 0
     layer, _ = SP.support_layers(R, I, len(vel), store)
     order, _ = SP._upward_order(I, MI, layer, store)

@@ -100,7 +100,8 @@ def _swept(extra, steps):
     cs = w.contact_system
     limit = cs.fp[VELOCITY_TOLERANCE] * least_mass(R)
     changes = np.empty(len(MI))
-    solve_velocities(R, I, M, MI, vel, omega, cs.ip[ITERATIONS], (limit, SETTLE * limit), changes)
+    solve_velocities(R, I, M, MI, vel, omega, cs.ip[ITERATIONS], (limit, SETTLE * limit, SP.STALL),
+                     changes)
     return w, R, I, M, MI, vel, omega, quat, store, changes, SETTLE * limit
 
 
@@ -179,9 +180,9 @@ def test_a_resting_pyramids_sweeps_go_on_to_where_the_shock_sweep_leaves_it_out(
         R, I, M, MI, vel, omega, quat, store = rows_before_solve(w, DT)
         limit = cs.fp[VELOCITY_TOLERANCE] * least_mass(R)
         changes = np.empty(len(MI))
+        settle = limit if stops == "tolerance" else SETTLE * limit
         sweeps, _ = solve_velocities(R, I, M, MI, vel, omega, cs.ip[ITERATIONS],
-                                     (limit, limit if stops == "tolerance" else SETTLE * limit),
-                                     changes)
+                                     (limit, settle, SP.STALL), changes)
         ends[stops] = (sweeps, changes.max(), SETTLE * limit)
     sweeps, change, bound = ends["tolerance"]
     assert change >= bound

@@ -49,7 +49,8 @@ def solved_rows(w):
     # swept on until they meet the skip's bound (this hand-made substep is not
     # the step's own, whose warm start usually meets it in one sweep)
     for _ in range(200):
-        _, change = solve_velocities(R, I, M, MI, vel, omega, 1, (stop, stop), np.empty(len(MI)))
+        _, change = solve_velocities(R, I, M, MI, vel, omega, 1, (stop, stop, np.inf),
+                                     np.empty(len(MI)))
         if change < SETTLE * stop:
             break
     store[1][CURSOR] = 0

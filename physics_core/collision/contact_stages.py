@@ -7,6 +7,8 @@ and what the earlier stages of the same substep made (the rows, the times
 of impact, the bounce targets). What outlives a substep is in the warm
 cache, the sleep state and the event log's state.
 """
+import math
+
 import numpy as np
 from numba import njit
 
@@ -27,7 +29,7 @@ from .push_out import correct
 from .scratch import take, take_bools, take_int_rows, take_ints, take_rows
 from .sequential_impulses import (friction_and_slip, friction_and_slip_of, least_mass,
                                   solve_velocities, warm_start)
-from .shock_propagation import holds_something, shock_sweep, swept_bodies
+from .shock_propagation import STALL, holds_something, shock_sweep, swept_bodies
 from .sleep_islands import _sync, _update, _wake_touched
 from .time_of_impact import rewind_fast_bodies
 from .warm_cache import warm_clear, warm_load, warm_store
@@ -159,11 +161,12 @@ def solve_stage(fp, ip, R, I, M, MI, key, vel, omega, warm, J, masses, store):
     changes = take(store, len(MI))
     # the shock sweep leaves out a group whose manifolds all changed by less
     # than `left_out` in the last sweep (below); where it will run, sweeps
-    # converging fast go on to that bound. With nothing immovable it visits
-    # nothing, and the sweeps stop as with it off
+    # converging fast go on to that bound, and sweeps that stall stop
+    # (solve_velocities): it settles what they leave. With nothing immovable
+    # it visits nothing, and the sweeps stop as with it off
     left_out = SETTLE * limit
     shock = ip[SHOCK_ON] and holds_something(R)
-    stops = (limit, left_out if shock else limit)
+    stops = (limit, left_out, STALL) if shock else (limit, limit, math.inf)
     sweeps, _ = solve_velocities(R, I, M, MI, vel, omega, ip[ITERATIONS], stops, changes)
     friction, slip = take_rows(store, len(R), 3), take(store, len(R))
     friction_and_slip(R, I, vel, omega, friction, slip)

@@ -65,7 +65,9 @@ UNREACHED = np.int64(1) << 40
 # impulses between them in a cycle that more sweeps do not end (a pyramid's
 # box on two boxes kept changing by 7.35e-4 m/s a sweep from its third sweep
 # to its sixteenth; a pile's second layer by 6.9e-3 m/s). A single support,
-# as in a stack or the 1000:1 pair, converges well inside the factor.
+# as in a stack or the 1000:1 pair, converges well inside the factor. The
+# sequential-impulse sweeps before this one stop by the same rule
+# (sequential_impulses.solve_velocities).
 STALL = 0.9
 # A layer's settle may not raise its bodies' kinetic energy by more than this
 # fraction (_settle_guarded). Measured: converging a box sliding on the floor

@@ -1,0 +1,73 @@
+"""The sequential-impulse sweeps stop once their largest change has stalled
+(sequential_impulses.solve_velocities: above shock_propagation.STALL times
+the largest two sweeps before), where the shock-propagation sweep follows
+them and settles what they leave.
+
+The bug this guards: a pile of cubes at rest (benchmarks/box_pile.py) ran
+all its `iterations` sweeps every substep: its four-corner manifolds and
+their friction anchors trade impulses in a cycle, the largest change
+4.3e-5 N·s in the third sweep and in the eighth, above the stop (1.3e-5).
+Checked here on that pile after a second: more sweeps do not shrink the
+change (the cycle), the sweeps now stop at it, and the shock sweep after
+them leaves the bodies' velocities as it leaves them after all eight
+sweeps, within its own settle tolerance (measured: 1e-8 m/s, 1e-7 rad/s).
+"""
+import numpy as np
+
+from benchmarks.box_pile import boxes
+from physics_core import load_scene
+from physics_core.collision import shock_propagation as SP
+from physics_core.collision.contact_data import (ITERATIONS, RESTING_BLOCK, SHOCK_ON,
+                                                 VELOCITY_TOLERANCE)
+from physics_core.collision.contact_stages import SETTLE
+from physics_core.collision.scratch import CURSOR
+from physics_core.collision.sequential_impulses import least_mass, solve_velocities
+from substep_rows import rows_before_solve
+
+DT = 1 / 240
+
+
+def pile_at_rest(n=100):
+    """The benchmark's pile of n cubes (sleep off) one second after the drop."""
+    bodies = [{"name": f"b{i}", "shape": {"type": "box", "half_extents": list(half)},
+               "mass": 1.0, "position": [float(c) for c in p]}
+              for i, (_, half, p) in enumerate(boxes(n))]
+    w = load_scene({"dt": DT, "gravity": [0.0, 0.0, -9.81],
+                    "effects": {"contacts": {"sleep": False}},
+                    "bodies": [{"name": "ground", "shape": {"type": "plane"}, "static": True}]
+                    + bodies})
+    w.step(240)
+    return w
+
+
+def solved(w, iterations, stall):
+    """One substep's sweeps as solve_stage runs them (at most `iterations`,
+    stall factor `stall`), then the shock sweep: (sweeps, last change, the
+    stop, vel, omega after both)."""
+    R, I, M, MI, vel, omega, quat, store = rows_before_solve(w, DT)
+    cs = w.contact_system
+    limit = cs.fp[VELOCITY_TOLERANCE] * least_mass(R)
+    changes = np.empty(len(MI))
+    sweeps, change = solve_velocities(R, I, M, MI, vel, omega, iterations,
+                                      (limit, SETTLE * limit, stall), changes)
+    store[1][CURSOR] = 0
+    SP.shock_sweep(R, I, M, MI, vel, omega, len(vel), cs.ip[SHOCK_ON],
+                   SETTLE * cs.fp[VELOCITY_TOLERANCE], (w._inv_mass, w.inv_inertia, quat),
+                   cs.ip[RESTING_BLOCK] != 0, (changes, SETTLE * limit), store)
+    return sweeps, change, limit, vel, omega
+
+
+def test_a_pile_of_cubes_at_rest_stops_sweeping_when_its_impulses_cycle():
+    w = pile_at_rest()
+    iterations = w.contact_system.ip[ITERATIONS]
+    _, at_three, limit, _, _ = solved(w, 3, np.inf)
+    full, at_all, _, v_all, o_all = solved(w, iterations, np.inf)
+    assert full == iterations and at_all >= limit, "the pile's sweeps converged: no cycle"
+    # the cycle: five more sweeps leave the largest change where it was
+    assert at_all > SP.STALL * at_three, (at_three, at_all)
+    sweeps, _, _, v, o = solved(w, iterations, SP.STALL)
+    assert sweeps == 3            # the first sweep with a change two sweeps before
+    # the shock sweep settles every body on its supports either way
+    settle = SETTLE * w.contact_system.fp[VELOCITY_TOLERANCE]
+    assert np.abs(v - v_all).max() < settle
+    assert np.abs(o - o_all).max() * 0.1 < settle        # at a cube's 0.1 m half size
