@@ -305,8 +305,7 @@ def test_spawn_entities_reports_each_result_and_a_namespace_holds_the_topics(sim
     push = driver.wait_for_subscriber(WrenchStamped, f"{NS}/team/a/probe/wrench")
     msg = WrenchStamped()
     msg.wrench.force.x = 3.0  # N on 3 kg: 1 m/s² along x
-    push.publish(msg)
-    driver.spin_for(0.3)
+    driver.publish_acked(push, msg)       # the node has it before the step request
     call(driver, "step_simulation", steps=10)
     assert entity_state(driver, "probe").twist.linear.x == pytest.approx(10 * FREE_DT_NS / 1e9, rel=1e-12)
 
@@ -335,8 +334,7 @@ def test_recording_with_spawns_deletes_and_teleports_resimulates_bit_exactly(sim
     push = driver.wait_for_subscriber(WrenchStamped, f"{NS}/b/wrench")
     msg = WrenchStamped()
     msg.wrench.force.x = 2.0
-    push.publish(msg)
-    driver.spin_for(0.3)
+    driver.publish_acked(push, msg)
     call(driver, "step_simulation", steps=20)
     assert call(driver, "delete_entity", entity="a").result.result == OK
     call(driver, "step_simulation", steps=10)
