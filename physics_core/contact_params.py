@@ -17,7 +17,8 @@ class ContactParams:
     velocity_tolerance: float = 1e-4     # m/s; sweeps stop early once none changes a contact's
                                          # relative velocity by more than this (0: always all sweeps);
                                          # where the shock sweep runs, sweeps converging fast go on
-                                         # to 1/100 of it (contact_stages.solve_stage)
+                                         # to 1/100 of it, and sweeps whose change has stalled stop
+                                         # (contact_stages.solve_stage)
     warm_start: float = 1.0              # fraction of last substep's impulses applied first, 0..1
     static_friction_speed: float = 0.01  # m/s; a contact slipping slower than this is held by static
                                          # friction (μ_s), faster it slides with μ_k (COURSE.md 5)

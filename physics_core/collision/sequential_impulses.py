@@ -162,10 +162,13 @@ def solve_velocities(R, I, M, MI, vel, omega, iterations, stops, changes):
     sweep (shock_propagation.leave_out_settled), whose tables cost several
     sweeps. They also stop, with `limit` > 0, after a sweep whose largest
     change is above `stall` times the largest two sweeps before (math.inf:
-    never): the sweeps then trade impulses in a cycle that more of them do
-    not end (a box's four corners and its friction anchor sharing a load:
-    a pile of cubes at rest changed by 4.3e-5 N·s in its third sweep and
-    its eighth), and every other manifold has converged below that level.
+    never): the sweeps then only move impulses along a direction that
+    changes almost no velocity, by about as much every sweep. A box's four
+    corners share its load in a line of ways (resting_block.py), and on a
+    pile of cubes at rest the sweeps move the load along that line,
+    converging at about 0.998 a sweep (its largest change 4.3e-5 N·s at the
+    third sweep and at the eighth); every other manifold has converged
+    below that level.
     solve_stage passes shock_propagation.STALL where the shock sweep
     follows, which settles what they leave. A NaN change never stops early.
     Returns (sweeps done, the last sweep's largest impulse change; NaN if
