@@ -21,10 +21,9 @@ def build(engine, bodies, dt=DT, iterations=ITERATIONS):
         bodies, dt, iterations)
 
 
-def _ours(bodies, dt, iterations):
-    import warnings
-
-    from physics_core import load_scene
+def scene_of(bodies, dt=DT, iterations=ITERATIONS):
+    """This engine's scene dict for a body list [(shape, size, position)]: a
+    ground plane, then body b{i} of MASS kg for each, sleep off."""
     scene = {"dt": dt, "gravity": [0.0, 0.0, -9.81],
              "effects": {"contacts": {"iterations": iterations, "sleep": False}},
              "bodies": [{"name": "ground", "shape": {"type": "plane"}, "static": True}]}
@@ -33,6 +32,14 @@ def _ours(bodies, dt, iterations):
              else {"type": "sphere", "radius": float(size)})
         scene["bodies"].append({"name": f"b{i}", "shape": s, "mass": MASS,
                                 "position": [float(c) for c in pos]})
+    return scene
+
+
+def _ours(bodies, dt, iterations):
+    import warnings
+
+    from physics_core import load_scene
+    scene = scene_of(bodies, dt, iterations)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)     # default-material friction fallback
         world = load_scene(scene, max_bodies=len(scene["bodies"]))   # the 10,000-body rows have a ground too

@@ -29,13 +29,10 @@ def world(bodies, **contacts):
 
 def pyramid(n):
     """benchmarks/pyramid.py's wall of n 20 cm boxes, 2 mm apart, on the ground
-    (default materials, sleep off)."""
+    (the benchmark's scene: default materials, sleep off)."""
+    from benchmarks.engines import scene_of
     from benchmarks.pyramid import boxes
-    bodies = [{"name": f"b{i}", "shape": {"type": "box", "half_extents": list(half)},
-               "mass": 1.0, "position": list(p)} for i, (_, half, p) in enumerate(boxes(n))]
-    return load_scene({"dt": 1 / 240, "gravity": [0, 0, -9.81],
-                       "effects": {"contacts": {"sleep": False}},
-                       "bodies": [{"name": "ground", "shape": {"type": "plane"}, "static": True}] + bodies})
+    return load_scene(scene_of(boxes(n)))
 
 
 def twenty_stack(**contacts):

@@ -18,6 +18,7 @@ visits, keeps its solve within the velocity tolerance.
 import numpy as np
 
 from benchmarks.box_pile import boxes
+from benchmarks.engines import scene_of
 from physics_core import load_scene
 from physics_core.collision import shock_propagation as SP
 from physics_core.collision.contact_data import (ITERATIONS, RESTING_BLOCK, SHOCK_ON,
@@ -32,13 +33,7 @@ DT = 1 / 240
 
 def pile_at_rest(n=100):
     """The benchmark's pile of n cubes (sleep off) one second after the drop."""
-    bodies = [{"name": f"b{i}", "shape": {"type": "box", "half_extents": list(half)},
-               "mass": 1.0, "position": [float(c) for c in p]}
-              for i, (_, half, p) in enumerate(boxes(n))]
-    w = load_scene({"dt": DT, "gravity": [0.0, 0.0, -9.81],
-                    "effects": {"contacts": {"sleep": False}},
-                    "bodies": [{"name": "ground", "shape": {"type": "plane"}, "static": True}]
-                    + bodies})
+    w = load_scene(scene_of(boxes(n), DT))
     w.step(240)
     return w
 
@@ -100,7 +95,7 @@ def test_a_gentle_collision_in_the_air_beside_the_pile_keeps_its_solve_within_th
     for stall in (np.inf, SP.STALL):
         R, I, M, MI, vel, omega, quat, store = rows_before_solve(w, DT)
         assert (np.isin(I[:, 0], row) | np.isin(I[:, 1], row)).sum() >= 7 * 2  # the row touches
-        limit = w.contact_system.fp[VELOCITY_TOLERANCE] * least_mass(R)
+        limit = tolerance * least_mass(R)
         sweeps, _ = solve_velocities(R, I, M, MI, vel, omega, w.contact_system.ip[ITERATIONS],
                                      (limit, SETTLE * limit, stall), np.empty(len(MI)))
         ends[stall] = (sweeps, vel[row], omega[row])
