@@ -37,10 +37,10 @@ FAR = 1e60
 def _shrunk(a11, a12, a22, lt1, lt2, sigma):
     """(I + σ A)⁻¹ λ* and its derivative in σ, −(I + σ A)⁻¹ A λ (A symmetric 2×2)."""
     m11, m12, m22 = 1.0 + sigma * a11, sigma * a12, 1.0 + sigma * a22
-    det = m11 * m22 - m12 * m12
-    x1, x2 = (m22 * lt1 - m12 * lt2) / det, (m11 * lt2 - m12 * lt1) / det
+    inv = 1.0 / (m11 * m22 - m12 * m12)
+    x1, x2 = (m22 * lt1 - m12 * lt2) * inv, (m11 * lt2 - m12 * lt1) * inv
     y1, y2 = a11 * x1 + a12 * x2, a12 * x1 + a22 * x2
-    return x1, x2, -(m22 * y1 - m12 * y2) / det, -(m11 * y2 - m12 * y1) / det
+    return x1, x2, -(m22 * y1 - m12 * y2) * inv, -(m11 * y2 - m12 * y1) * inv
 
 
 @njit(cache=True)

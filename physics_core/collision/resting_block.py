@@ -95,12 +95,13 @@ def _factor(ws, k):
             d -= ws[FAC + p, s] * ws[FAC + p, s]
         if not d > SINGULAR * top:
             return False
-        ws[FAC + p, p] = math.sqrt(d)
+        inv = 1.0 / math.sqrt(d)
+        ws[FAC + p, p] = inv
         for q in range(p + 1, 6):
             e = ws[FAC + q, p]
             for s in range(p):
                 e -= ws[FAC + q, s] * ws[FAC + p, s]
-            ws[FAC + q, p] = e / ws[FAC + p, p]
+            ws[FAC + q, p] = e * inv
     return True
 
 
@@ -111,12 +112,12 @@ def _solve(ws, y):
         s = y[p]
         for q in range(p):
             s -= ws[FAC + p, q] * y[q]
-        y[p] = s / ws[FAC + p, p]
+        y[p] = s * ws[FAC + p, p]
     for p in range(5, -1, -1):
         s = y[p]
         for q in range(p + 1, 6):
             s -= ws[FAC + q, p] * y[q]
-        y[p] = s / ws[FAC + p, p]
+        y[p] = s * ws[FAC + p, p]
 
 
 @njit(cache=True, inline="always")
