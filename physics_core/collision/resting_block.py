@@ -80,9 +80,10 @@ def _manifold_rows(R1, I1, M1, MI1, m, vel, omega, upper_is_b, ws, j):
 def _factor(ws, k):
     """JᵀJ of the k rows into ws[FAC:FAC + 6], Cholesky-factored in place
     (lower), each pivot's reciprocal on the diagonal: the solves multiply by
-    it (divisions wait on one another, about 14 cycles each, and a solve
-    chained 33 of them); False when a pivot is not clearly positive (the
-    rows do not fix all six velocities: collinear points)."""
+    it (a body's solve chained some 40 divisions, each waiting on the one
+    before: 15 in the factor and 12 in each of its two or three
+    substitutions); False when a pivot is not clearly positive (the rows do
+    not fix all six velocities: collinear points)."""
     top = 0.0
     for p in range(6):
         for q in range(p + 1):          # the factorisation reads the lower triangle only
