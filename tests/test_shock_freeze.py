@@ -1,12 +1,15 @@
 """Freezing one side of a contact row for the shock-propagation sweep
 (shock_propagation._freeze_row, _freeze_anchor): the lower body made
-immovable, the row's effective masses computed again.
+immovable; the row's effective masses computed again when a layer's sweeps
+need them (_row_masses, _frozen_masses; a layer the resting solve settles
+never reads them).
 
-Two shortcuts must leave every number the sweeps read as the full
-recompute gives it: a side that is immovable already (a static or sleeping
-body: its inverse mass and turns +0.0) is left as it is, and an anchored
-manifold's row (friction on the anchor) gets only its normal's effective
-mass anew. Checked bit for bit on random rows (Hypothesis).
+Every number the sweeps read must be what the full recompute gives: a side
+that is immovable already (a static or sleeping body: its inverse mass and
+turns +0.0) is left as it is and its masses come back with the bits the
+row was built with, and an anchored manifold's row (friction on the
+anchor) gets only its normal's effective mass anew. Checked bit for bit on
+random rows (Hypothesis).
 """
 import numpy as np
 from hypothesis import given, settings
@@ -57,7 +60,8 @@ def _full_freeze(R, side):
 def test_freezing_a_movable_side_gives_the_full_recompute_bit_for_bit(seed, side, anchored):
     R = _row(seed)
     want = _full_freeze(R, side)
-    SP._freeze_row(R, 0, side, anchored)
+    SP._freeze_row(R, 0, side)
+    SP._row_masses(R, 0, anchored)
     keep = [c for c in range(NCOL) if not (anchored and c in POINT_ONLY)]
     assert R[0, keep].tobytes() == want[0, keep].tobytes()
     assert R[0, MASS_N] == want[0, MASS_N] > 0.0
@@ -68,7 +72,8 @@ def test_freezing_a_movable_side_gives_the_full_recompute_bit_for_bit(seed, side
 def test_freezing_a_side_already_immovable_changes_no_bit(seed, side, anchored):
     R = _row(seed, frozen_side=side)
     before = R.copy()
-    SP._freeze_row(R, 0, side, anchored)
+    SP._freeze_row(R, 0, side)
+    SP._row_masses(R, 0, anchored)
     assert R.tobytes() == before.tobytes() == _full_freeze(before, side).tobytes()
 
 
@@ -76,7 +81,7 @@ def test_a_negative_zero_turn_is_not_taken_for_an_immovable_side():
     R = _row(7, frozen_side=1)
     R[0, TURN_B + 4] = -0.0
     assert not SP._held(R, 0, INV_MASS_B, TURN_B)
-    SP._freeze_row(R, 0, 1, False)
+    SP._freeze_row(R, 0, 1)
     assert np.copysign(1.0, R[0, TURN_B + 4]) == 1.0       # written as the freeze writes it
 
 
@@ -88,12 +93,12 @@ def test_an_anchor_frozen_twice_is_the_anchor_frozen_once(seed, side):
     M[0, :47] = rng.normal(size=47)
     M[0, IMA], M[0, IMB] = rng.uniform(0.1, 10.0, 2)
     w = np.zeros((3, 3))
-    SP._freeze_anchor(M, 0, side, w)
+    SP._freeze_anchor(M, 0, side)
+    _invert(M, 0, w)                     # as _frozen_masses gives it
     once = M.copy()
     turn = TA if side == 0 else TB
     assert M[0, IMA if side == 0 else IMB] == 0.0 and not M[0, turn:turn + 9].any()
-    SP._freeze_anchor(M, 0, side, w)
+    SP._freeze_anchor(M, 0, side)
     assert M.tobytes() == once.tobytes()
-    again = once.copy()
-    _invert(again, 0, w)                 # what the freeze without the shortcut recomputed
-    assert again.tobytes() == once.tobytes()
+    _invert(M, 0, w)
+    assert M.tobytes() == once.tobytes()

@@ -238,24 +238,45 @@ def _make_immovable(T, k, inv_mass, turn):
 
 
 @njit(cache=True, inline="always")
-def _freeze_row(R, c, side, anchored):
-    """Row c with body `side` (0: a, 1: b) immovable: no impulse reaches it.
-    The row of an anchored manifold (its friction is the anchor's) gets its
-    normal's effective mass anew, the only one of its masses the sweeps read."""
+def _freeze_row(R, c, side):
+    """Row c with body `side` (0: a, 1: b) immovable: no impulse reaches it
+    (its effective masses: _row_masses, when a sweep needs them)."""
     inv_mass, turn = (INV_MASS_A, TURN_A) if side == 0 else (INV_MASS_B, TURN_B)
-    if not _make_immovable(R, c, inv_mass, turn):
-        return
+    _make_immovable(R, c, inv_mass, turn)
+
+
+@njit(cache=True, inline="always")
+def _freeze_anchor(M, k, side):
+    inv_mass, turn = (IMA, TA) if side == 0 else (IMB, TB)
+    _make_immovable(M, k, inv_mass, turn)
+
+
+@njit(cache=True, inline="always")
+def _row_masses(R, c, anchored):
+    """Row c's effective masses from its columns as they are: the row of an
+    anchored manifold (its friction is the anchor's) only its normal's, the
+    only one of its masses the sweeps read. On a side immovable already
+    they are the numbers the row was built with (the same functions of the
+    same columns)."""
     if anchored:
         R[c, MASS_N] = normal_mass(R, c)
     else:
         effective_masses(R, c)
 
 
-@njit(cache=True, inline="always")
-def _freeze_anchor(M, k, side, w):
-    inv_mass, turn = (IMA, TA) if side == 0 else (IMB, TB)
-    if _make_immovable(M, k, inv_mass, turn):
-        _invert(M, k, w)
+@njit(cache=True)
+def _frozen_masses(one_sided, g, e, w):
+    """The effective masses of manifolds g..e's rows and anchors, their lower
+    side frozen (_one_sided): what the layer's sweeps read. The resting
+    solve (resting_block.py) reads none of them, so a layer it settles
+    never computes them. w: (3, 3) scratch."""
+    R1, I1, M1, MI1 = one_sided
+    for m in range(g, e):
+        first, count = MI1[m, FIRST], MI1[m, COUNT]
+        for c in range(first, first + count):
+            _row_masses(R1, c, count >= 2)
+        if count >= 2:
+            _invert(M1, m, w)
 
 
 @njit(cache=True, inline="always")
@@ -268,7 +289,8 @@ def _copy_row(T, k, T1, m):
 @njit(cache=True)
 def _one_sided(R, I, M, MI, layer, order, store):
     """Compact copies (R1, I1, M1, MI1) of the manifolds of `order`, in that
-    order, with the lower layer's side of every row immovable. A single
+    order, with the lower layer's side of every row immovable (the effective
+    masses as they were: _frozen_masses, layer by layer). A single
     point has no friction anchor (manifold_friction.py): its M1 row is left
     unwritten, and _scatter_impulses does not read it."""
     rows = 0
@@ -276,7 +298,6 @@ def _one_sided(R, I, M, MI, layer, order, store):
         rows += MI[k, COUNT]
     R1, I1 = take_rows(store, rows, R.shape[1]), take_int_rows(store, rows, I.shape[1])
     M1, MI1 = take_rows(store, len(order), M.shape[1]), take_int_rows(store, len(order), MI.shape[1])
-    w = take_rows(store, 3, 3)
     r = 0
     for m in range(len(order)):
         k = order[m]
@@ -289,10 +310,10 @@ def _one_sided(R, I, M, MI, layer, order, store):
         for c in range(first, first + count):
             _copy_row(R, c, R1, r)
             _copy_row(I, c, I1, r)
-            _freeze_row(R1, r, side, count >= 2)
+            _freeze_row(R1, r, side)
             r += 1
         if count >= 2:
-            _freeze_anchor(M1, m, side, w)
+            _freeze_anchor(M1, m, side)
     return R1, I1, M1, MI1
 
 
@@ -547,9 +568,11 @@ def _settle_guarded(one_sided, g, e, vel, omega, passes, tolerance, moved, clock
             saved[k, j], saved[k, 3 + j] = vel[upper[k], j], omega[upper[k], j]
     before = _kinetic_energy(upper, vel, omega, masses)
     if not resting[0]:
+        _frozen_masses(one_sided, g, e, take_rows(store, 3, 3))
         clock = _settle(one_sided, g, e, vel, omega, passes, tolerance, moved, clock, True, store)
     elif not _settle_resting(one_sided, g, e, vel, omega, layer, masses, moved, clock, tolerance,
                              resting):
+        _frozen_masses(one_sided, g, e, take_rows(store, 3, 3))
         clock = _settle(one_sided, g, e, vel, omega, passes, tolerance, moved, clock, False, store)
     if _kinetic_energy(upper, vel, omega, masses) > before * (1.0 + GAIN) + 1e-300:
         for k in range(len(upper)):
