@@ -27,7 +27,7 @@ from .kinetic_drift import kinetic_velocity_change
 from .manifold_friction import anchor_friction_out, anchor_rows, anchor_warm_start
 from .push_out import correct
 from .scratch import take, take_bools, take_int_rows, take_ints, take_rows
-from .sequential_impulses import (friction_and_slip, friction_and_slip_of, least_mass,
+from .sequential_impulses import (friction_and_slip, friction_of, least_mass,
                                   solve_velocities, warm_start)
 from .shock_propagation import STALL, holds_something, shock_sweep, swept_bodies
 from .sleep_islands import _sync, _update, _wake_touched
@@ -185,7 +185,7 @@ def solve_stage(fp, ip, R, I, M, MI, key, vel, omega, warm, J, masses, store):
                                      masses, ip[RESTING_BLOCK] != 0, (changes, left_out),
                                      store)
         if visited:
-            friction_and_slip_of(R, I, vel, omega, friction, slip, swept_bodies(layer, store))
+            friction_of(R, I, friction, swept_bodies(layer, store))
             anchor_friction_out(R, M, MI, friction)
     slide = kinetic_velocity_change(R, I, M, MI, len(vel), store)
     add_bounces(R, J, friction)

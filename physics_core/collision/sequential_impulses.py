@@ -201,10 +201,16 @@ def _settling(change, before, settle, left):
 
 
 @njit(cache=True, inline="always")
-def _friction_and_slip_row(R, I, c, vel, omega, friction, slip):
-    a, b = I[c, BODY_A], I[c, BODY_B]
+def _friction_row(R, c, friction):
+    """Contact c's tangential impulse as a world vector λ_t1 t1 + λ_t2 t2."""
     for i in range(3):
         friction[c, i] = R[c, LAM + 1] * R[c, DIR + 3 + i] + R[c, LAM + 2] * R[c, DIR + 6 + i]
+
+
+@njit(cache=True, inline="always")
+def _friction_and_slip_row(R, I, c, vel, omega, friction, slip):
+    a, b = I[c, BODY_A], I[c, BODY_B]
+    _friction_row(R, c, friction)
     u1 = row_velocity(R, c, 1, a, b, vel, omega)
     u2 = row_velocity(R, c, 2, a, b, vel, omega)
     slip[c] = math.sqrt(u1 * u1 + u2 * u2)
@@ -219,12 +225,14 @@ def friction_and_slip(R, I, vel, omega, friction, slip):
 
 
 @njit(cache=True)
-def friction_and_slip_of(R, I, vel, omega, friction, slip, moved):
-    """friction_and_slip of the contacts with a body marked `moved` (n,): the
-    others' impulses and velocities are those it was computed from."""
+def friction_of(R, I, friction, moved):
+    """The tangential impulses (world vectors) of the contacts with a body
+    marked `moved` (n,), read again after the shock sweep: the others'
+    impulses are those they were computed from. Their slip is not: only the
+    warm cache reads it, and it keeps the sweeps' own."""
     for c in range(len(R)):
         if moved[I[c, BODY_A]] or moved[I[c, BODY_B]]:
-            _friction_and_slip_row(R, I, c, vel, omega, friction, slip)
+            _friction_row(R, c, friction)
 
 
 @njit(cache=True)
