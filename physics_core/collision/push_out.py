@@ -16,12 +16,11 @@ positions and are then thrown away, so pushing bodies apart adds no kinetic
 energy. Only translation: a push-out that also turned the bodies would tilt
 a box out of the floor whenever one corner's push is larger than another's.
 """
-import numpy as np
 from numba import njit
 
 from ..quaternion import integrate_one, row4
 from .contact_layout import (ARM_A, ARM_B, BODY_A, BODY_B, DEPTH, DIR, INV_MASS_A, INV_MASS_B)
-from .scratch import take, take_rows
+from .scratch import take, take_bools, take_rows
 
 
 @njit(cache=True)
@@ -87,18 +86,22 @@ def push_targets(sep, slop, rate, max_speed, h, target):
 
 
 @njit(cache=True)
-def solve_pseudo(R, I, target, iterations, n):
+def solve_pseudo(R, I, target, iterations, n, store):
     """(n, 3) pseudo-velocities of the centres: normal rows pushed apart to
     `target`, from zero. Only rows of bodies that some row must push take
     part (with every other row of those bodies, so a push does not drive
-    them into a neighbour)."""
-    pushed = np.zeros(n, np.bool_)
+    them into a neighbour). Its arrays are views of the substep's scratch
+    (scratch.py), not allocations."""
+    pushed = take_bools(store, n)
+    pushed[:] = False
     for c in range(len(R)):
         if target[c] > 0.0:
             pushed[I[c, BODY_A]] = True
             pushed[I[c, BODY_B]] = True
-    X = np.zeros((n, 3))
-    lam = np.zeros(len(R))
+    X = take_rows(store, n, 3)
+    X[:] = 0.0
+    lam = take(store, len(R))
+    lam[:] = 0.0
     for _ in range(iterations):
         for c in range(len(R)):
             a, b = I[c, BODY_A], I[c, BODY_B]
@@ -141,5 +144,5 @@ def correct(R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, slide, 
     X = take_rows(store, 0, 3)
     if iterations > 0 and rate > 0.0 and max_speed > 0.0 and push_targets(sep, slop, rate,
                                                                             max_speed, h, push):
-        X = solve_pseudo(R, I, push, iterations, len(pos))
+        X = solve_pseudo(R, I, push, iterations, len(pos), store)
     move_bodies(pos, quat, dV, X, h)
