@@ -228,13 +228,12 @@ def _held(T, k, inv_mass, turn):
 @njit(cache=True, inline="always")
 def _make_immovable(T, k, inv_mass, turn):
     """Entry k's side (its inverse-mass column, its nine turn columns) set to
-    +0.0; False, with nothing written, when it was so already (_held)."""
+    +0.0; nothing written when it was so already (_held)."""
     if _held(T, k, inv_mass, turn):
-        return False
+        return
     T[k, inv_mass] = 0.0
     for i in range(9):
         T[k, turn + i] = 0.0
-    return True
 
 
 @njit(cache=True, inline="always")
@@ -567,13 +566,12 @@ def _settle_guarded(one_sided, g, e, vel, omega, passes, tolerance, moved, clock
         for j in range(3):
             saved[k, j], saved[k, 3 + j] = vel[upper[k], j], omega[upper[k], j]
     before = _kinetic_energy(upper, vel, omega, masses)
-    if not resting[0]:
+    # with the resting solve on, the sweeps start from the bodies it left (every=False)
+    if not resting[0] or not _settle_resting(one_sided, g, e, vel, omega, layer, masses, moved,
+                                             clock, tolerance, resting):
         _frozen_masses(one_sided, g, e, take_rows(store, 3, 3))
-        clock = _settle(one_sided, g, e, vel, omega, passes, tolerance, moved, clock, True, store)
-    elif not _settle_resting(one_sided, g, e, vel, omega, layer, masses, moved, clock, tolerance,
-                             resting):
-        _frozen_masses(one_sided, g, e, take_rows(store, 3, 3))
-        clock = _settle(one_sided, g, e, vel, omega, passes, tolerance, moved, clock, False, store)
+        clock = _settle(one_sided, g, e, vel, omega, passes, tolerance, moved, clock,
+                        not resting[0], store)
     if _kinetic_energy(upper, vel, omega, masses) > before * (1.0 + GAIN) + 1e-300:
         for k in range(len(upper)):
             for j in range(3):
