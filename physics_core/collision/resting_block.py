@@ -35,7 +35,7 @@ from numba import njit
 
 from ..quaternion import rotate_inverse_one, rotate_one, row4
 from .contact_build import row_velocity
-from .contact_layout import ARM_A, ARM_B, BIAS, BODY_A, BODY_B, DIR, INV_MASS_A, INV_MASS_B, LAM
+from .contact_layout import ARM_A, ARM_B, BIAS, BODY_A, BODY_B, DIR, LAM
 from .manifold_friction import AA, AB, COUNT, FIRST, L, M_LAM, M_MU_S, M_SLIDING, RADIUS
 from .pair_velocity import load_pair, pair_impulse, store_pair
 
@@ -258,73 +258,74 @@ def _all_hold(R1, M1, MI1, ms, ws):
 
 
 @njit(cache=True, inline="always")
-def _apply(R1, I1, M1, MI1, ms, vel, omega, ws):
-    """The impulses ws[VEC] along the manifolds' rows, added to their λ."""
+def _apply(tables, ms, upper, vel, omega, ws):
+    """The impulses ws[VEC] along the manifolds' rows, added to their λ; only
+    the upper body's velocities change (the support is frozen: its side of
+    each row takes no impulse)."""
+    R, I, M, MI = tables
     j = 0
     for m in ms:
-        first, count = MI1[m, FIRST], MI1[m, COUNT]
-        a, b = I1[first, BODY_A], I1[first, BODY_B]
+        first, count = MI[m, FIRST], MI[m, COUNT]
+        a, b = I[first, BODY_A], I[first, BODY_B]
         p = load_pair(vel, omega, a, b)
         for c in range(first, first + count):
-            R1[c, LAM] += ws[VEC, j]
-            p = pair_impulse(R1, c, 0, ws[VEC, j], p)
+            R[c, LAM] += ws[VEC, j]
+            p = pair_impulse(R, c, 0, ws[VEC, j], p)
             j += 1
         for r in range(3):
-            M1[m, M_LAM + r] += ws[VEC, j]
-            p = pair_impulse(M1, m, r, ws[VEC, j], p)
+            M[m, M_LAM + r] += ws[VEC, j]
+            p = pair_impulse(M, m, r, ws[VEC, j], p)
             j += 1
-        store_pair(vel, omega, a, b, p)
+        o = 6 if b == upper else 0
+        for i in range(3):
+            vel[upper, i], omega[upper, i] = p[o + i], p[o + 3 + i]
 
 
 @njit(cache=True, inline="always")
-def _upper_side(R1, I1, MI1, m):
-    """(the movable body, whether it is side b) of manifold m if it may take
-    part: two points or more, static friction, one side frozen and the
-    other movable; (-1, False) otherwise."""
-    first, count = MI1[m, FIRST], MI1[m, COUNT]
-    if count < 2 or MI1[m, M_SLIDING] != 0:
-        return -1, False
-    upper_is_b = R1[first, INV_MASS_A] == 0.0
-    if upper_is_b == (R1[first, INV_MASS_B] == 0.0):
-        return -1, False
-    return (I1[first, BODY_B] if upper_is_b else I1[first, BODY_A]), upper_is_b
+def _takes_part(I, MI, m, upper):
+    """(whether manifold m may take part: two points or more, static
+    friction, `upper` one of its bodies; whether `upper` is its side b)."""
+    first, count = MI[m, FIRST], MI[m, COUNT]
+    upper_is_b = I[first, BODY_B] == upper
+    ok = count >= 2 and MI[m, M_SLIDING] == 0 and (upper_is_b or I[first, BODY_A] == upper)
+    return ok, upper_is_b
 
 
 @njit(cache=True, inline="always")
-def _rows(one_sided, ms, vel, omega, ws):
-    """(body, row count) of the manifolds ms of one body, their rows in the
-    workspace; body -1 when one of them may not take part."""
-    R1, I1, M1, MI1 = one_sided
-    body, j = -1, 0
+def _rows(tables, ms, upper, vel, omega, ws):
+    """The row count of the manifolds ms of body `upper`, their rows in the
+    workspace; -1 when one of them may not take part."""
+    R, I, M, MI = tables
+    j = 0
     for m in ms:
-        upper, upper_is_b = _upper_side(R1, I1, MI1, m)
-        if upper < 0 or (body >= 0 and upper != body) or j + MI1[m, COUNT] + 3 > ROWS:
-            return -1, 0
-        body = upper
-        j = _manifold_rows(R1, I1, M1, MI1, m, vel, omega, upper_is_b, ws, j)
-    return body, j
+        ok, upper_is_b = _takes_part(I, MI, m, upper)
+        if not ok or j + MI[m, COUNT] + 3 > ROWS:
+            return -1
+        j = _manifold_rows(R, I, M, MI, m, vel, omega, upper_is_b, ws, j)
+    return j
 
 
 @njit(cache=True)
-def settle_resting(one_sided, ms, vel, omega, masses, tolerance, ws):
-    """The manifolds ms (all those of one body in its layer, the lower side
-    frozen) solved at once when the body rests on them (module docstring),
-    `tolerance` the settle's (m/s); True if they were, False with nothing
-    changed."""
-    R1, I1, M1, MI1 = one_sided
-    body, k = _rows(one_sided, ms, vel, omega, ws)
-    if body < 0 or not _factor(ws, k):
+def settle_resting(tables, ms, upper, vel, omega, masses, tolerance, ws):
+    """The manifolds ms of the contact tables (R, I, M, MI) (all those of body
+    `upper` with the layer below, whose bodies are frozen: no impulse
+    reaches them) solved at once when the body rests on them (module
+    docstring), `tolerance` the settle's (m/s); True if they were, False
+    with nothing changed."""
+    R, I, M, MI = tables
+    k = _rows(tables, ms, upper, vel, omega, ws)
+    if k < 0 or not _factor(ws, k):
         return False
     # one face's seven conditions are consistent but for the touch shift of its
     # anchor (contact_build.contact_arms: 2 s |ω| of a turning support); several
     # supports are consistent only while they move as one
     residual = RESIDUAL * tolerance if len(ms) > 1 else math.inf
-    if not _velocity_change(ws, k, residual) or not _momentum(ws, body, masses):
+    if not _velocity_change(ws, k, residual) or not _momentum(ws, upper, masses):
         return False
     _impulses(ws, k)
-    if not _all_hold(R1, M1, MI1, ms, ws):
-        first, count = MI1[ms[0], FIRST], MI1[ms[0], COUNT]
-        if not (_push_everywhere(R1, first, count, ws, k) and _all_hold(R1, M1, MI1, ms, ws)):
+    if not _all_hold(R, M, MI, ms, ws):
+        first, count = MI[ms[0], FIRST], MI[ms[0], COUNT]
+        if not (_push_everywhere(R, first, count, ws, k) and _all_hold(R, M, MI, ms, ws)):
             return False
-    _apply(R1, I1, M1, MI1, ms, vel, omega, ws)
+    _apply(tables, ms, upper, vel, omega, ws)
     return True

@@ -285,16 +285,23 @@ def _copy_row(T, k, T1, m):
         T1[m, j] = T[k, j]
 
 
+@njit(cache=True, inline="always")
+def _row_count(MI, ms):
+    """The rows of manifolds ms."""
+    rows = 0
+    for k in ms:
+        rows += MI[k, COUNT]
+    return rows
+
+
 @njit(cache=True)
 def _one_sided(R, I, M, MI, layer, order, store):
-    """Compact copies (R1, I1, M1, MI1) of the manifolds of `order`, in that
-    order, with the lower layer's side of every row immovable (the effective
-    masses as they were: _frozen_masses, layer by layer). A single
-    point has no friction anchor (manifold_friction.py): its M1 row is left
-    unwritten, and _scatter_impulses does not read it."""
-    rows = 0
-    for k in order:
-        rows += MI[k, COUNT]
+    """Compact copies (R1, I1, M1, MI1) of the manifolds of `order` (one
+    layer's, for its sweeps), in that order, with the lower layer's side of
+    every row immovable (the effective masses as they were: _frozen_masses).
+    A single point has no friction anchor (manifold_friction.py): its M1 row
+    is left unwritten, and _scatter_impulses does not read it."""
+    rows = _row_count(MI, order)
     R1, I1 = take_rows(store, rows, R.shape[1]), take_int_rows(store, rows, I.shape[1])
     M1, MI1 = take_rows(store, len(order), M.shape[1]), take_int_rows(store, len(order), MI.shape[1])
     r = 0
@@ -447,12 +454,11 @@ def _settle(one_sided, start, stop, vel, omega, passes, tolerance, moved, clock,
 
 
 @njit(cache=True)
-def _scatter_impulses(R, M, MI, order, R1, M1, MI1, kept):
-    """The settled λ of the compact rows and anchors back into R and M (those
-    of the layers kept)."""
+def _scatter_impulses(R, M, MI, order, one_sided):
+    """The settled λ of the compact rows and anchors (_one_sided of `order`)
+    back into R and M."""
+    R1, _, M1, MI1 = one_sided
     for m in range(len(order)):
-        if not kept[m]:
-            continue
         k = order[m]
         for j in range(MI[k, COUNT]):
             for r in range(3):
@@ -480,14 +486,13 @@ def _kinetic_energy(bodies, vel, omega, masses):
 
 
 @njit(cache=True, inline="always")
-def _upper_bodies(I1, MI1, layer, g, e, mark, store):
-    """The bodies of the higher layer of manifolds g..e, each once (mark: (n,)
-    False on entry and on return)."""
+def _upper_bodies(I, MI, order, layer, g, e, mark, store):
+    """The bodies of the higher layer of manifolds order[g:e], each once
+    (mark: (n,) False on entry and on return)."""
     out = take_ints(store, e - g)
     k = 0
     for m in range(g, e):
-        a, b = I1[MI1[m, FIRST], BODY_A], I1[MI1[m, FIRST], BODY_B]
-        i = a if layer[a] > layer[b] else b
+        i = _upper(I, MI, order[m], layer)
         if not mark[i]:
             mark[i] = True
             out[k] = i
@@ -498,46 +503,48 @@ def _upper_bodies(I1, MI1, layer, g, e, mark, store):
 
 
 @njit(cache=True)
-def _settle_resting(one_sided, g, e, vel, omega, layer, masses, moved, clock, tolerance,
+def _settle_resting(tables, order, g, e, vel, omega, layer, masses, moved, clock, tolerance,
                     resting):
-    """Each upper body of manifolds g..e with all its manifolds there, solved
-    at once if it rests on them (resting_block.py). The bodies not solved
+    """Each upper body of manifolds order[g:e] with all its manifolds there,
+    solved at once if it rests on them (resting_block.py, on the contact
+    tables themselves: it moves the upper body alone). The bodies not solved
     are marked moved for sweep clock + 1 and the solved ones not moved, so
-    the sweeps that follow start from the others alone. True when every one was (the layer then needs no
-    sweeps). resting = (on, uses (n,) zero on entry and on return, the
-    solve's workspace, room for one body's manifolds)."""
+    the sweeps that follow start from the others alone. True when every one
+    was (the layer then needs no sweeps). resting = (on, uses (n,) zero on
+    entry and on return, the solve's workspace, room for one body's
+    manifolds)."""
     on, uses, ws, ms = resting
-    R1, I1, M1, MI1 = one_sided
+    R, I, M, MI = tables
     for m in range(g, e):
-        uses[_upper(I1, MI1, m, layer)] += 1
+        uses[_upper(I, MI, order[m], layer)] += 1
     solved = True
     for m in range(g, e):
-        body = _upper(I1, MI1, m, layer)
+        body = _upper(I, MI, order[m], layer)
         if uses[body] < 0:
             continue                     # solved or given up with an earlier manifold of it
-        k = _body_manifolds(MI1, I1, m, e, layer, body, uses[body], ms)
-        if k == 0 or not settle_resting(one_sided, ms[:k], vel, omega, masses, tolerance, ws):
+        k = _body_manifolds(MI, I, order, m, e, layer, body, uses[body], ms)
+        if k == 0 or not settle_resting(tables, ms[:k], body, vel, omega, masses, tolerance, ws):
             solved = False
             moved[body] = clock + 1
         else:
             moved[body] = -1             # at rest on its supports: no sweep need visit it
         uses[body] = -1
     for m in range(g, e):
-        uses[_upper(I1, MI1, m, layer)] = 0
+        uses[_upper(I, MI, order[m], layer)] = 0
     return solved
 
 
 @njit(cache=True, inline="always")
-def _body_manifolds(MI1, I1, m, e, layer, body, count, ms):
-    """ms[:k] ← manifold m and the `count` − 1 after it (up to e) whose upper
-    body is `body`; k, or 0 when they cannot be solved together (more than
-    ms holds, or m has a single point)."""
-    if count > len(ms) or MI1[m, COUNT] < 2:
+def _body_manifolds(MI, I, order, m, e, layer, body, count, ms):
+    """ms[:k] ← manifold order[m] and the `count` − 1 after it in `order` (up
+    to e) whose upper body is `body`; k, or 0 when they cannot be solved
+    together (more than ms holds, or order[m] has a single point)."""
+    if count > len(ms) or MI[order[m], COUNT] < 2:
         return 0
     k = 0
     for q in range(m, e):
-        if _upper(I1, MI1, q, layer) == body:
-            ms[k] = q
+        if _upper(I, MI, order[q], layer) == body:
+            ms[k] = order[q]
             k += 1
             if k == count:
                 break
@@ -545,38 +552,81 @@ def _body_manifolds(MI1, I1, m, e, layer, body, count, ms):
 
 
 @njit(cache=True, inline="always")
-def _upper(I1, MI1, m, layer):
+def _upper(I, MI, m, layer):
     """The body of manifold m in the higher layer."""
-    a, b = I1[MI1[m, FIRST], BODY_A], I1[MI1[m, FIRST], BODY_B]
+    a, b = I[MI[m, FIRST], BODY_A], I[MI[m, FIRST], BODY_B]
     return a if layer[a] > layer[b] else b
 
 
+@njit(cache=True, inline="always")
+def _swap(T, i, at, saved, j, put_back):
+    """saved[j] ← T[i, at:at + 3], or back (put_back)."""
+    for r in range(3):
+        if put_back:
+            T[i, at + r] = saved[j, r]
+        else:
+            saved[j, r] = T[i, at + r]
+
+
 @njit(cache=True)
-def _settle_guarded(one_sided, g, e, vel, omega, passes, tolerance, moved, clock, layer, masses,
-                    kept, mark, resting, store):
-    """_settle for one layer, undone if it gave the layer's bodies kinetic
-    energy: resting on what holds it removes approach and slip, so a layer
-    that gains energy was made to follow a support it cannot follow (a box
-    on two boxes moving apart, a box turning under another): its velocities
-    and impulses are put back, and kept[g:e] is False. Returns the clock."""
-    R1, I1, M1, MI1 = one_sided
-    upper = _upper_bodies(I1, MI1, layer, g, e, mark, store)
+def _lambdas(R, M, MI, ms, saved, put_back):
+    """The λ of manifolds ms's rows and anchors into `saved` ((rows + anchors,
+    3): each manifold's rows, then its anchor), or back from it (put_back)."""
+    j = 0
+    for k in ms:
+        first, count = MI[k, FIRST], MI[k, COUNT]
+        for c in range(first, first + count):
+            _swap(R, c, LAM, saved, j, put_back)
+            j += 1
+        if count >= 2:                   # a single point has no anchor (_one_sided)
+            _swap(M, k, M_LAM, saved, j, put_back)
+            j += 1
+
+
+@njit(cache=True)
+def _layer_sweeps(tables, ms, vel, omega, passes, tolerance, moved, clock, layer, every,
+                  store):
+    """_settle on the one-sided copies of manifolds ms (one layer's), made
+    here, their λ put back into the tables after; returns the clock."""
+    R, I, M, MI = tables
+    one_sided = _one_sided(R, I, M, MI, layer, ms, store)
+    _frozen_masses(one_sided, 0, len(ms), take_rows(store, 3, 3))
+    clock = _settle(one_sided, 0, len(ms), vel, omega, passes, tolerance, moved, clock, every,
+                    store)
+    _scatter_impulses(R, M, MI, ms, one_sided)
+    return clock
+
+
+@njit(cache=True)
+def _settle_guarded(tables, order, g, e, vel, omega, passes, tolerance, moved, clock, layer,
+                    masses, mark, resting, store):
+    """One layer (manifolds order[g:e]) settled, undone if it gave the
+    layer's bodies kinetic energy: resting on what holds it removes approach
+    and slip, so a layer that gains energy was made to follow a support it
+    cannot follow (a box on two boxes moving apart, a box turning under
+    another): its velocities and λ are put back. The resting solve works on
+    the tables themselves; only a layer with a body it left unsolved is
+    copied into one-sided tables for its sweeps (_layer_sweeps). Returns
+    the clock."""
+    R, I, M, MI = tables
+    upper = _upper_bodies(I, MI, order, layer, g, e, mark, store)
     saved = take_rows(store, len(upper), 6)
     for k in range(len(upper)):
         for j in range(3):
             saved[k, j], saved[k, 3 + j] = vel[upper[k], j], omega[upper[k], j]
+    lam = take_rows(store, (e - g) + _row_count(MI, order[g:e]), 3)
+    _lambdas(R, M, MI, order[g:e], lam, False)
     before = _kinetic_energy(upper, vel, omega, masses)
     # with the resting solve on, the sweeps start from the bodies it left (every=False)
-    if not resting[0] or not _settle_resting(one_sided, g, e, vel, omega, layer, masses, moved,
-                                             clock, tolerance, resting):
-        _frozen_masses(one_sided, g, e, take_rows(store, 3, 3))
-        clock = _settle(one_sided, g, e, vel, omega, passes, tolerance, moved, clock,
-                        not resting[0], store)
+    if not resting[0] or not _settle_resting(tables, order, g, e, vel, omega, layer, masses,
+                                             moved, clock, tolerance, resting):
+        clock = _layer_sweeps(tables, order[g:e], vel, omega, passes, tolerance, moved, clock,
+                              layer, not resting[0], store)
     if _kinetic_energy(upper, vel, omega, masses) > before * (1.0 + GAIN) + 1e-300:
         for k in range(len(upper)):
             for j in range(3):
                 vel[upper[k], j], omega[upper[k], j] = saved[k, j], saved[k, 3 + j]
-        kept[g:e] = False
+        _lambdas(R, M, MI, order[g:e], lam, True)
     return clock
 
 
@@ -598,11 +648,8 @@ def shock_sweep(R, I, M, MI, vel, omega, n, passes, tolerance, masses, block, un
             and leave_out_settled(I, MI, layer, graph, unsettled, store) == 0):
         return 0, layer
     order, top = _upward_order(I, MI, layer, store)
-    one_sided = _one_sided(R, I, M, MI, layer, order, store)
     moved = take_ints(store, n)
     moved[:] = -1
-    kept = take_bools(store, len(order))
-    kept[:] = True
     mark = take_bools(store, n)
     mark[:] = False
     uses = take_ints(store, n)
@@ -615,8 +662,7 @@ def shock_sweep(R, I, M, MI, vel, omega, n, passes, tolerance, masses, block, un
         e = g + 1
         while e < len(order) and top[e] == top[g]:
             e += 1
-        clock = _settle_guarded(one_sided, g, e, vel, omega, passes, tolerance, moved, clock,
-                                layer, masses, kept, mark, resting, store)
+        clock = _settle_guarded((R, I, M, MI), order, g, e, vel, omega, passes, tolerance, moved,
+                                clock, layer, masses, mark, resting, store)
         g = e
-    _scatter_impulses(R, M, MI, order, one_sided[0], one_sided[2], one_sided[3], kept)
     return len(order), layer
