@@ -47,7 +47,7 @@ def one_sided_manifolds(w):
     solve_velocities(R, I, M, MI, vel, omega, ip[CS.ITERATIONS], (-1.0, -1.0, np.inf),
                      np.empty(len(MI)))
     store[1][CURSOR] = 0
-    layer, _ = SP.support_layers(R, I, len(vel), store)
+    layer, _ = SP.support_layers(R, I, MI, len(vel), store)
     order, _ = SP._upward_order(I, MI, layer, store)
     one_sided = tuple(np.array(x) for x in SP._one_sided(R, I, M, MI, layer, order, store))
     return one_sided, vel, omega, (w._inv_mass, w.inv_inertia, quat)

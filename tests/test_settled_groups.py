@@ -73,7 +73,7 @@ def test_a_body_is_kept_only_with_an_unsettled_manifold_in_its_group(seed, n, co
     changes = np.where(rng.random(contacts) < settled, 0.5, 2.0)
     changes[rng.random(contacts) < 0.05] = np.nan          # a NaN change is never settled
     store = empty_store()
-    layer, graph = SP.support_layers(R, I, n, store)
+    layer, graph = SP.support_layers(R, I, MI, n, store)
     before = layer.copy()
     kept = SP.leave_out_settled(I, MI, layer, graph, (changes, 1.0), store)
     want, count = _reference(I, before, changes, 1.0)

@@ -78,21 +78,22 @@ GAIN = 1e-4
 
 
 @njit(cache=True)
-def _neighbours(I, n, store):
-    """CSR adjacency of the contact graph: (start (n + 1), other body per
-    entry), in the substep's scratch (scratch.py)."""
+def _neighbours(I, MI, n, store):
+    """CSR adjacency of the contact graph, an entry a manifold (its rows share
+    one body pair): (start (n + 1), other body per entry), in the substep's
+    scratch (scratch.py)."""
     start = take_ints(store, n + 1)
     start[:] = 0
-    for c in range(len(I)):
-        start[I[c, BODY_A] + 1] += 1
-        start[I[c, BODY_B] + 1] += 1
+    for k in range(len(MI)):
+        start[I[MI[k, FIRST], BODY_A] + 1] += 1
+        start[I[MI[k, FIRST], BODY_B] + 1] += 1
     for i in range(n):
         start[i + 1] += start[i]
     fill = take_ints(store, n)
     fill[:] = start[:-1]
-    other = take_ints(store, 2 * len(I))
-    for c in range(len(I)):
-        a, b = I[c, BODY_A], I[c, BODY_B]
+    other = take_ints(store, 2 * len(MI))
+    for k in range(len(MI)):
+        a, b = I[MI[k, FIRST], BODY_A], I[MI[k, FIRST], BODY_B]
         other[fill[a]] = b
         fill[a] += 1
         other[fill[b]] = a
@@ -101,21 +102,25 @@ def _neighbours(I, n, store):
 
 
 @njit(cache=True)
-def support_layers(R, I, n, store):
+def support_layers(R, I, MI, n, store):
     """((n,) breadth-first layer of every body from the immovable ones (a row
-    side with zero inverse mass) over the contacts, UNREACHED elsewhere;
-    the contact graph (_neighbours))."""
+    side with zero inverse mass) over the manifolds, UNREACHED elsewhere;
+    the contact graph (_neighbours)). A layer is a distance in that graph,
+    so it does not depend on the order the search meets the bodies in; a
+    manifold's rows share their bodies and inverse masses, so its first
+    row stands for them all."""
     layer = take_ints(store, n)
     layer[:] = UNREACHED
     queue = take_ints(store, n)
     tail = 0
-    for c in range(len(I)):
+    for k in range(len(MI)):
+        c = MI[k, FIRST]
         for side, body in ((INV_MASS_A, I[c, BODY_A]), (INV_MASS_B, I[c, BODY_B])):
             if R[c, side] == 0.0 and layer[body] != 0:
                 layer[body] = 0
                 queue[tail] = body
                 tail += 1
-    start, other = _neighbours(I, n, store)
+    start, other = _neighbours(I, MI, n, store)
     head = 0
     while head < tail:
         i = queue[head]
@@ -642,7 +647,7 @@ def shock_sweep(R, I, M, MI, vel, omega, n, passes, tolerance, masses, block, un
     unsettled_count = _unsettled_count(MI, unsettled)
     if unsettled_count == 0:
         return 0, take_ints(store, 0)
-    layer, graph = support_layers(R, I, n, store)
+    layer, graph = support_layers(R, I, MI, n, store)
     # every reached body has a manifold: with all of them unsettled, none is left out
     if (unsettled_count < len(MI)
             and leave_out_settled(I, MI, layer, graph, unsettled, store) == 0):
