@@ -133,3 +133,63 @@ def test_a_box_landing_any_way_never_gains_kinetic_energy(tilt, axis, spin, side
     for _ in range(24):
         w.step()
         assert _kinetic(w) <= k0 * (1 + 1e-9)
+
+
+def _rows_at_landing(w, dt):
+    """The rows of w's next substep (no gravity) before the collision pass, and
+    what the pass reads besides them."""
+    from physics_core.collision import contact_stages as CS
+    from physics_core.collision.scratch import new_counts
+    cs, s = w.contact_system, w.state
+    store = (np.empty(1 << 18), new_counts())
+    pos, quat, vel, omega = s.pos.copy(), s.quat.copy(), s.vel.copy(), s.omega.copy()
+    pos += vel * dt * (cs.cm.inv_mass > 0)[:, None]
+    found = CS.detect_stage(cs.cm, cs.fp, cs.ip, pos, quat, s.awake, cs.sleep, cs.cap[0], store)
+    contacts = tuple(np.array(x) for x in found[:6])
+    rows = CS.rows_stage(cs.cm, cs.fp, cs.ip, contacts, pos, quat, vel, omega, w._inv_mass,
+                         w.inv_inertia, cs.warm, np.full(len(pos), -1.0), dt, s.vel.copy(),
+                         s.omega.copy(), store)
+    return tuple(np.array(x) for x in rows), vel, omega, store
+
+
+def test_a_manifolds_rows_leave_their_tangent_block_to_the_bounce_that_needs_it():
+    """A face's rows take their friction from the manifold's anchor, so the
+    rows are built without the tangent block a single point's friction reads
+    (NaN there: a reader would fail the step's finite check); a point of
+    the face that bounces computes it then. A cube landing flat while
+    sliding (its points bounce with friction) must come out of the pass
+    bit for bit as from rows built with the block."""
+    from physics_core.collision import contact_stages as CS
+    from physics_core.collision.contact_build import effective_masses
+    from physics_core.collision.contact_layout import G_TN, MASS_N, W_TT
+    from physics_core.collision.manifold_friction import COUNT, FIRST
+    dt = 1.0 / 240.0
+    w = load_scene(scene(floor(0.5), box("b", (0.0, 0.0, HALF + 0.002), (1.0, 0.3, -2.0)),
+                         {"name": "ball", "shape": {"type": "sphere", "radius": 0.1},
+                          "mass": 1.0, "restitution": 0.5, "position": [1.0, 0.0, 0.101],
+                          "velocity": [0.5, 0.0, -2.0]}, mu=0.3))
+    (R, I, M, MI), vel, omega, store = _rows_at_landing(w, dt)
+    block = slice(W_TT, G_TN + 2)
+    counts = MI[:, COUNT]
+    assert sorted(counts) == [1, 4]
+    full = R.copy()
+    for k in range(len(MI)):
+        rows = range(MI[k, FIRST], MI[k, FIRST] + MI[k, COUNT])
+        for c in rows:
+            effective_masses(full, c)
+            assert full[c, MASS_N] == R[c, MASS_N]
+            if MI[k, COUNT] >= 2:
+                assert np.isnan(R[c, block]).all()
+            else:
+                assert R[c, block].tobytes() == full[c, block].tobytes()
+    outcomes, rising = [], []
+    for rows in (R, full):
+        v, o = vel.copy(), omega.copy()
+        target, tau, J = CS.restitution_stage(w.contact_system.fp, w.contact_system.ip, rows, I,
+                                              M.copy(), MI, v, o, vel.copy(), omega.copy(), dt,
+                                              store)
+        outcomes.append(b"".join(np.array(x).tobytes() for x in (v, o, target, tau, J)))
+        assert (np.array(J)[:, 1:] != 0.0).any()      # friction on the bounce
+        rising.append(v[1:, 2])
+    assert outcomes[0] == outcomes[1]
+    assert (rising[0] > 0.0).all()                     # both bodies bounced

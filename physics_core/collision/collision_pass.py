@@ -34,8 +34,8 @@ energy, they are undone and its points bounce one by one.
 from numba import njit
 
 from .bounce import AFTER, bounce_friction, bounce_goal, impact_terms
-from .contact_build import row_velocity
-from .contact_layout import BODY_A, BODY_B, MASS_N
+from .contact_build import row_velocity, tangent_block
+from .contact_layout import BODY_A, BODY_B, MASS_N, W_TT_INV
 from .pair_velocity import load_pair, pair_impulse, pair_velocity, store_pair
 
 # columns of the pass's scratch table after impact_terms' (WHEN, SHIFT, AFTER)
@@ -146,6 +146,8 @@ def _record(R, I, first, end, vel, omega, target, tau, J, table):
         jn = table[c, ACC]
         if not jn > 0.0:
             continue
+        if R[c, W_TT_INV] != R[c, W_TT_INV]:
+            tangent_block(R, c)          # a manifold's point (contact_build.build_rows)
         s1, s2 = bounce_friction(R, c, a, b, jn, vel, omega)
         J[c, 0] += jn
         J[c, 1] += s1

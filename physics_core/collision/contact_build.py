@@ -13,6 +13,8 @@ overlap is removed by the position pass, never by adding velocity. A body
 the ccd stage moved back to its time of impact already sits at the start
 of its remaining motion, so there s0 = s_end.
 """
+import math
+
 from numba import njit
 
 from ..quaternion import row4, to_matrix_one
@@ -100,8 +102,8 @@ def normal_mass(R, c):
 
 
 @njit(cache=True, inline="always")
-def effective_masses(R, c):
-    """1/W_nn, the tangent block and its inverse, and W_tt⁻¹ W_tn."""
+def normal_masses(R, c):
+    """K_A, K_B (each body's part of W_00: restitution weights them) and 1/W_nn."""
     k_a = R[c, INV_MASS_A]
     k_b = R[c, INV_MASS_B]
     for i in range(3):
@@ -109,6 +111,13 @@ def effective_masses(R, c):
         k_b += R[c, ARM_B + i] * R[c, TURN_B + i]
     R[c, K_A], R[c, K_B] = k_a, k_b
     R[c, MASS_N] = normal_mass(R, c)
+
+
+@njit(cache=True, inline="always")
+def tangent_block(R, c):
+    """The tangent block W_tt, its inverse and W_tt⁻¹ W_tn: what a single
+    point's friction reads (sequential_impulses.update_contact, and a
+    bounce's friction, bounce.bounce_friction)."""
     w11, w12 = coupling(R, c, 1, 1), coupling(R, c, 1, 2)
     w21, w22 = coupling(R, c, 2, 1), coupling(R, c, 2, 2)
     det = w11 * w22 - w12 * w21
@@ -118,6 +127,31 @@ def effective_masses(R, c):
     R[c, W_TT_INV], R[c, W_TT_INV + 1], R[c, W_TT_INV + 2], R[c, W_TT_INV + 3] = i11, i12, i21, i22
     t1n, t2n = coupling(R, c, 1, 0), coupling(R, c, 2, 0)
     R[c, G_TN], R[c, G_TN + 1] = i11 * t1n + i12 * t2n, i21 * t1n + i22 * t2n
+
+
+@njit(cache=True, inline="always")
+def effective_masses(R, c):
+    """1/W_nn, the tangent block and its inverse, and W_tt⁻¹ W_tn."""
+    normal_masses(R, c)
+    tangent_block(R, c)
+
+
+@njit(cache=True, inline="always")
+def _no_tangent_block(R, c):
+    """NaN in the tangent block's columns of a row whose friction is its
+    manifold's anchor (manifold_friction.py): no solve reads them, and a
+    reader that did would make the step's finite check fail."""
+    for j in range(W_TT, G_TN + 2):
+        R[c, j] = math.nan
+
+
+@njit(cache=True, inline="always")
+def in_manifold(a, b, c):
+    """Whether contact c shares its body pair with a neighbour: a manifold of
+    two or more points (the contacts of one pair are consecutive)."""
+    before = c > 0 and a[c - 1] == a[c] and b[c - 1] == b[c]
+    after = c + 1 < len(a) and a[c + 1] == a[c] and b[c + 1] == b[c]
+    return before or after
 
 
 @njit(cache=True, inline="always")
@@ -205,7 +239,11 @@ def build_rows(R, I, a, b, point, normal, depth, pos, iw, vel, omega, inv_mass, 
         R[c, INV_MASS_A], R[c, INV_MASS_B] = inv_mass[i], inv_mass[j]
         s0 = contact_arms(R, c, i, j, point, depth[c], pos, vel, omega, iw, h,
                           toi[i] >= 0.0 or toi[j] >= 0.0)
-        effective_masses(R, c)
+        normal_masses(R, c)
+        if in_manifold(a, b, c):
+            _no_tangent_block(R, c)      # the anchor's friction (a bounce computes it)
+        else:
+            tangent_block(R, c)
         for r in range(3):
             R[c, U0 + r] = row_velocity(R, c, r, i, j, vel, omega)
             R[c, LAM + r] = 0.0
