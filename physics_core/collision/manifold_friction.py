@@ -147,10 +147,11 @@ def _invert(M, k, w):
 def anchor_rows(R, I, point, pos, iw, toi, h, store):
     """(M, MI) of the contact rows: every manifold's range, and the anchor
     rows of those with two or more points (the rows' own friction zeroed);
-    toi, h: the bodies' times of impact and the substep (the touch shift)."""
+    toi, h: the bodies' times of impact and the substep (the touch shift).
+    A single point's M row is left unwritten: every reader of M takes the
+    manifolds of two or more points only."""
     MI = manifold_ranges(I, store)
     M = take_rows(store, len(MI), MCOL)
-    M[:] = 0.0
     w = take_rows(store, 3, 3)
     n = take(store, 3)
     for k in range(len(MI)):
@@ -171,6 +172,7 @@ def anchor_rows(R, I, point, pos, iw, toi, h, store):
                     cz - pos[b, 2] - s * n[2], iw, b)
         _invert(M, k, w)
         M[k, M_MU_S], M[k, M_MU_K], M[k, RADIUS] = R[first, MU_S], R[first, MU_K], rbar
+        M[k, M_LAM], M[k, M_LAM + 1], M[k, M_LAM + 2] = 0.0, 0.0, 0.0   # every other column is set
         _take_row_friction(R, M, k, first, count)
     return M, MI
 
