@@ -55,23 +55,23 @@ WS_SHAPE = (ROWS + 10, ROWS)   # the workspace: J (rows 0..ROWS-1, 6 columns), J
 
 
 @njit(cache=True, inline="always")
-def _manifold_rows(R1, I1, M1, MI1, m, vel, omega, upper_is_b, ws, j):
+def _manifold_rows(R, I, M, MI, m, vel, omega, upper_is_b, ws, j):
     """J and t − u of manifold m's rows from row j of the workspace; the next row."""
-    first, count = MI1[m, FIRST], MI1[m, COUNT]
-    a, b = I1[first, BODY_A], I1[first, BODY_B]
+    first, count = MI[m, FIRST], MI[m, COUNT]
+    a, b = I[first, BODY_A], I[first, BODY_B]
     sign = 1.0 if upper_is_b else -1.0
     arm, anchor_arm = (ARM_B, AB) if upper_is_b else (ARM_A, AA)
     for c in range(first, first + count):
         for i in range(3):
-            ws[j, i] = sign * R1[c, DIR + i]
-            ws[j, 3 + i] = sign * R1[c, arm + i]
-        ws[VEC, j] = R1[c, BIAS] - row_velocity(R1, c, 0, a, b, vel, omega)
+            ws[j, i] = sign * R[c, DIR + i]
+            ws[j, 3 + i] = sign * R[c, arm + i]
+        ws[VEC, j] = R[c, BIAS] - row_velocity(R, c, 0, a, b, vel, omega)
         j += 1
     for r in range(3):
         for i in range(3):
-            ws[j, i] = sign * M1[m, L + 3 * r + i]
-            ws[j, 3 + i] = sign * M1[m, anchor_arm + 3 * r + i]
-        ws[VEC, j] = -row_velocity(M1, m, r, a, b, vel, omega)    # the rows' layout
+            ws[j, i] = sign * M[m, L + 3 * r + i]
+            ws[j, 3 + i] = sign * M[m, anchor_arm + 3 * r + i]
+        ws[VEC, j] = -row_velocity(M, m, r, a, b, vel, omega)    # the rows' layout
         j += 1
     return j
 
@@ -196,12 +196,12 @@ def _null_impulse(ws, k, e):
 
 
 @njit(cache=True)
-def _shift_bounds(R1, first, count, ws):
+def _shift_bounds(R, first, count, ws):
     """(lo, hi, row at lo, row at hi): the moves t along ws[NUL] that keep every
     normal impulse ≥ 0 (lo > hi: none does)."""
     lo, hi, at_lo, at_hi = -math.inf, math.inf, -1, -1
     for j in range(count):
-        lam, z = R1[first + j, LAM] + ws[VEC, j], ws[NUL, j]
+        lam, z = R[first + j, LAM] + ws[VEC, j], ws[NUL, j]
         if z > 0.0 and -lam / z > lo:
             lo, at_lo = -lam / z, j
         elif z < 0.0 and -lam / z < hi:
@@ -212,48 +212,48 @@ def _shift_bounds(R1, first, count, ws):
 
 
 @njit(cache=True)
-def _push_everywhere(R1, first, count, ws, k):
+def _push_everywhere(R, first, count, ws, k):
     """Moves the impulses ws[VEC] along the load-sharing direction of a single
     manifold of four points (its only one) to the nearest point where every
     normal impulse is ≥ 0; False if there is none."""
     if k != 7 or _null_impulse(ws, k, 0) < 1e-12:
         return False
-    lo, hi, at_lo, at_hi = _shift_bounds(R1, first, count, ws)
+    lo, hi, at_lo, at_hi = _shift_bounds(R, first, count, ws)
     if not lo <= hi:
         return False
     t, at = (lo, at_lo) if lo > 0.0 else ((hi, at_hi) if hi < 0.0 else (0.0, -1))
     for j in range(k):
         ws[VEC, j] += t * ws[NUL, j]
     if at >= 0:
-        ws[VEC, at] = -R1[first + at, LAM]       # the row that bounds the move ends at exactly 0
+        ws[VEC, at] = -R[first + at, LAM]       # the row that bounds the move ends at exactly 0
     return True
 
 
 @njit(cache=True, inline="always")
-def _holds(R1, M1, MI1, m, ws, j):
+def _holds(R, M, MI, m, ws, j):
     """Manifold m's points (workspace rows from j) still push and its friction
     holds after the impulses ws[VEC]."""
-    first, count = MI1[m, FIRST], MI1[m, COUNT]
+    first, count = MI[m, FIRST], MI[m, COUNT]
     ln = 0.0
     for i in range(count):
-        lam = R1[first + i, LAM] + ws[VEC, j + i]
+        lam = R[first + i, LAM] + ws[VEC, j + i]
         if not lam >= 0.0:
             return False
         ln += lam
-    t0 = M1[m, M_LAM] + ws[VEC, j + count]
-    t1 = M1[m, M_LAM + 1] + ws[VEC, j + count + 1]
-    twist = M1[m, M_LAM + 2] + ws[VEC, j + count + 2]
-    lim = M1[m, M_MU_S] * ln
-    return t0 * t0 + t1 * t1 <= lim * lim and abs(twist) <= lim * M1[m, RADIUS]
+    t0 = M[m, M_LAM] + ws[VEC, j + count]
+    t1 = M[m, M_LAM + 1] + ws[VEC, j + count + 1]
+    twist = M[m, M_LAM + 2] + ws[VEC, j + count + 2]
+    lim = M[m, M_MU_S] * ln
+    return t0 * t0 + t1 * t1 <= lim * lim and abs(twist) <= lim * M[m, RADIUS]
 
 
 @njit(cache=True, inline="always")
-def _all_hold(R1, M1, MI1, ms, ws):
+def _all_hold(R, M, MI, ms, ws):
     j = 0
     for m in ms:
-        if not _holds(R1, M1, MI1, m, ws, j):
+        if not _holds(R, M, MI, m, ws, j):
             return False
-        j += MI1[m, COUNT] + 3
+        j += MI[m, COUNT] + 3
     return True
 
 

@@ -518,8 +518,8 @@ def _settle_resting(tables, order, g, e, vel, omega, layer, masses, moved, clock
     was (the layer then needs no sweeps). resting = (on, uses (n,) zero on
     entry and on return, the solve's workspace, room for one body's
     manifolds)."""
-    on, uses, ws, ms = resting
-    R, I, M, MI = tables
+    _, uses, ws, ms = resting
+    _, I, _, MI = tables
     for m in range(g, e):
         uses[_upper(I, MI, order[m], layer)] += 1
     solved = True
