@@ -1,8 +1,9 @@
 """The shock sweep's manifold order (shock_propagation._upward_order): the
-manifolds between two support layers, by (higher layer, lower layer), key
-order within. Made by two counting sorts; checked against the stable
-argsort of the rank higher × (n + 1) + lower it replaces, on random layers
-and contact graphs (Hypothesis), with unreached bodies and manifolds within
+manifolds between two support layers, by (higher layer, the body in it),
+key order within, so that a layer's manifolds come in one run per body
+they hold up. Made by two counting sorts; checked against the stable
+argsort of the rank higher × (n + 1) + upper body, on random layers and
+contact graphs (Hypothesis), with unreached bodies and manifolds within
 one layer left out. A manifold with one body unreached (no breadth-first
 search gives one) is left out too, not indexed by its layer.
 """
@@ -20,7 +21,8 @@ def _reference(I, MI, layer):
     n = len(layer)
     la, lb = layer[I[MI[:, FIRST], BODY_A]], layer[I[MI[:, FIRST], BODY_B]]
     top, lo = np.maximum(la, lb), np.minimum(la, lb)
-    rank = np.where((lo == SP.UNREACHED) | (lo == top), SP.UNREACHED, top * (n + 1) + lo)
+    upper = np.where(la > lb, I[MI[:, FIRST], BODY_A], I[MI[:, FIRST], BODY_B])
+    rank = np.where((lo == SP.UNREACHED) | (lo == top), SP.UNREACHED, top * (n + 1) + upper)
     order = np.argsort(rank, kind="mergesort")
     order = order[rank[order] != SP.UNREACHED]
     return order, top[order]

@@ -14,7 +14,8 @@ views count no references. `take(store, size)` returns the next `size`
 elements; a request past the end gets a new array of its own instead, and
 the cursor still counts it, so the next substep's buffer is grown to the
 whole demand (at least twice the old size: capacity doubling, as scenes
-gain bodies or rows). A view is valid until the next `open_arena`; its
+gain bodies or rows). A view is valid until the next `open_arena`, or
+until `rewind` gives back the views taken after a `cursor` mark; its
 contents are whatever was there (np.empty's contract). Integer and boolean
 views share the buffer (`take_ints`, `take_bools`).
 
@@ -134,3 +135,21 @@ def take_int_rows(store, rows, cols):
     at = _claim(store, rows * cols)
     return (_carve(store[0], at, (rows, cols), np.int64(0)) if at >= 0
             else np.empty((rows, cols), np.int64))
+
+
+@njit(cache=True, inline="always")
+def cursor(store):
+    """Where the next take starts: a mark for `rewind`."""
+    return store[1][CURSOR]
+
+
+@njit(cache=True, inline="always")
+def rewind(store, mark):
+    """Every view taken since the cursor was at `mark` given back (the caller
+    no longer reads them): the next takes reuse their memory, still in the
+    processor's cache, so a loop taking per-item tables works in one small
+    region. Not when one of them fell past the buffer's end: the cursor
+    then keeps the whole demand, which grows the next substep's buffer."""
+    buf, counts = store
+    if counts[CURSOR] <= len(buf):
+        counts[CURSOR] = mark

@@ -15,25 +15,23 @@ bodies they touch otherwise (breadth-first over the contacts). The
 manifolds between two layers are then solved once more, layer after
 layer from the lowest up, with the layer below immovable (its side of a
 row takes no impulse and the effective masses are the upper body's
-alone), sweep after sweep until the layer's velocities settle: every
-contact then ends with the upper body not approaching the lower and,
-within the friction cone, not slipping on it, whatever the mass ratio.
-Within a sweep a manifold is updated again only if one of its bodies'
-contact-point velocities changed by the tolerance since the sweep before
-(the rest are settled: updating them changes nothing). Contacts within
-one layer carry no support from below (neither body rests on the other)
-and were solved by the sweeps; leaving them out lets each body settle on
-its own supports instead of every body of a layer converging as one
-group (together the two cut a formed 1,000-sphere pile's sweep from 1.9×
-to 0.75× the cost of the rest of its step, with the stack and mass-ratio
-results unchanged). Bodies that touch nothing immovable (free-flying
-groups) are not visited, so their momentum is kept exactly. This removes
-the reaction of an upper body on the lower within this sweep only: the
+alone): every contact then ends with the upper body not approaching the
+lower and, within the friction cone, not slipping on it, whatever the
+mass ratio. With the layer below immovable, two bodies of a layer share
+no movable body, so each is settled on its own: its manifolds swept
+until its contact-point velocities settle, in copies with the lower side
+frozen that stay in cache while it converges, then the next body.
+Contacts within one layer carry no support from below (neither body
+rests on the other) and were solved by the sweeps; leaving them out
+lets each body settle on its own supports instead of every body of a
+layer converging as one group. Bodies that touch nothing immovable
+(free-flying groups) are not visited, so their momentum is kept exactly.
+This removes the reaction of an upper body on the lower within this sweep only: the
 warm-started sweeps before it carry the loads down.
 
-A layer stops sweeping once its change stalls (STALL), and a layer whose
+A body stops sweeping once its change stalls (STALL), and a layer whose
 settle raised its bodies' kinetic energy is undone (GAIN,
-_settle_guarded): a body on two supports that move apart cannot follow
+_settle_layer): a body on two supports that move apart cannot follow
 both, and making it try threw the top boxes off a tall pyramid.
 
 On a converged solve the sweep changes nothing (no contact approaches or
@@ -55,7 +53,7 @@ from .contact_layout import (ARM_A, ARM_B, BODY_A, BODY_B, INV_MASS_A, INV_MASS_
                              TURN_A, TURN_B)
 from .manifold_friction import COUNT, FIRST, IMA, IMB, M_LAM, TA, TB, _invert
 from .resting_block import MANIFOLDS, WS_SHAPE, settle_resting
-from .scratch import take, take_bools, take_int_rows, take_ints, take_rows
+from .scratch import cursor, rewind, take, take_bools, take_int_rows, take_ints, take_rows
 from .pair_velocity import load_pair, store_pair
 from .sequential_impulses import manifold_update
 
@@ -268,7 +266,7 @@ def _row_masses(R, c, anchored):
         effective_masses(R, c)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _frozen_masses(one_sided, g, e, w):
     """The effective masses of manifolds g..e's rows and anchors, their lower
     side frozen (_one_sided): what the layer's sweeps read. The resting
@@ -299,7 +297,7 @@ def _row_count(MI, ms):
     return rows
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _one_sided(R, I, M, MI, layer, order, store):
     """Compact copies (R1, I1, M1, MI1) of the manifolds of `order` (one
     layer's, for its sweeps), in that order, with the lower layer's side of
@@ -331,19 +329,20 @@ def _one_sided(R, I, M, MI, layer, order, store):
 @njit(cache=True)
 def _upward_order(I, MI, layer, store):
     """(order, top): the manifolds between two layers (touching something
-    immovable), by (higher layer, lower layer), key order within (a stable
-    sort: deterministic), and the higher layer of each."""
-    top, lo = take_ints(store, len(MI)), take_ints(store, len(MI))
+    immovable), by (higher layer, the body in it, key order) (two stable
+    counting sorts: deterministic), and the higher layer of each: a layer's
+    manifolds come in runs, one run for each body they hold up."""
+    top, up = take_ints(store, len(MI)), take_ints(store, len(MI))
     between = take_ints(store, len(MI))
     m = 0
     for k in range(len(MI)):
-        la, lb = layer[I[MI[k, FIRST], BODY_A]], layer[I[MI[k, FIRST], BODY_B]]
-        top[k], lo[k] = max(la, lb), min(la, lb)
-        if top[k] != UNREACHED and lo[k] != top[k]:      # both reached (so lo is), apart
+        a, b = I[MI[k, FIRST], BODY_A], I[MI[k, FIRST], BODY_B]
+        la, lb = layer[a], layer[b]
+        top[k], up[k] = max(la, lb), (a if la > lb else b)
+        if top[k] != UNREACHED and min(la, lb) != top[k]:   # both reached (so lo is), apart
             between[m] = k
             m += 1
-    # by the lower layer, then stably by the higher: (higher, lower, key order)
-    order = _counting_order(_counting_order(between[:m], lo, len(layer), store), top,
+    order = _counting_order(_counting_order(between[:m], up, len(layer), store), top,
                             len(layer), store)
     tops = take_ints(store, m)
     for s in range(m):
@@ -353,8 +352,9 @@ def _upward_order(I, MI, layer, store):
 
 @njit(cache=True)
 def _counting_order(items, key, limit, store):
-    """`items` stably sorted by key[item] (0 <= key < limit; a layer is less
-    than the body count): a counting sort in scratch, O(items + limit)."""
+    """`items` stably sorted by key[item] (0 <= key < limit; a layer and a body
+    index are less than the body count): a counting sort in scratch,
+    O(items + limit)."""
     start = take_ints(store, limit + 1)
     start[:] = 0
     for k in items:
@@ -393,72 +393,44 @@ def _point_change(p0, p, o, lever):
 
 
 @njit(cache=True, inline="always")
-def _update(R1, I1, M1, MI1, m, vel, omega, lever, tolerance, moved, clock):
+def _update(R1, I1, M1, MI1, m, vel, omega, lever):
     """One update of manifold m; returns the largest change of a contact-point
-    velocity of its bodies it made (m/s). A body whose change reaches
-    `tolerance` is marked moved in sweep `clock`."""
+    velocity of its bodies it made (m/s)."""
     first = MI1[m, FIRST]
     a, b = I1[first, BODY_A], I1[first, BODY_B]
     p0 = load_pair(vel, omega, a, b)
     p, _ = manifold_update(R1, I1, M1, MI1, m, p0)
     store_pair(vel, omega, a, b, p)
-    da = _point_change(p0, p, 0, lever)
-    db = _point_change(p0, p, 6, lever)
-    if da >= tolerance:
-        moved[a] = clock
-    if db >= tolerance:
-        moved[b] = clock
-    return max(da, db)
+    return max(_point_change(p0, p, 0, lever), _point_change(p0, p, 6, lever))
 
 
 @njit(cache=True, inline="always")
-def _sweep(one_sided, start, stop, vel, omega, levers, tolerance, moved, clock, every):
-    """One sweep (number `clock`) over manifolds start..stop: all of them if
-    `every`, else those with a body that moved in the sweep before or this
-    one. Returns the largest contact-point velocity change (m/s)."""
+def _settle(one_sided, vel, omega, passes, tolerance, store):
+    """Sweeps over one body's one-sided manifolds (its supports immovable), up
+    to `passes`, until a sweep changes no contact-point velocity by more
+    than `tolerance` (m/s; ≤ 0: all passes): the body then rests on the
+    layer below, solved to convergence (a partly converged box on four
+    corners tilts). The test is on velocities, not impulses: four coplanar
+    corners share a load in many ways, so their impulses can keep trading
+    while the body's velocity has long settled. It also stops when its
+    change has stalled (STALL)."""
     R1, I1, M1, MI1 = one_sided
-    change = 0.0
-    for m in range(start, stop):
-        a, b = I1[MI1[m, FIRST], BODY_A], I1[MI1[m, FIRST], BODY_B]
-        if every or moved[a] >= clock - 1 or moved[b] >= clock - 1:
-            change = max(change, _update(R1, I1, M1, MI1, m, vel, omega, levers[m - start],
-                                         tolerance, moved, clock))
-    return change
-
-
-@njit(cache=True)
-def _settle(one_sided, start, stop, vel, omega, passes, tolerance, moved, clock, every, store):
-    """Sweeps over one layer's manifolds start..stop (the lower layer
-    immovable), up to `passes`, until a sweep changes no contact-point
-    velocity by more than `tolerance` (m/s; ≤ 0: all passes): the layer's
-    bodies then rest on the one below, solved to convergence (a partly
-    converged box on four corners tilts). After the first sweep, a manifold
-    neither of whose bodies moved (`moved`, by sweep count `clock`) in the
-    sweep before or this one is settled and skipped. The test is on
-    velocities, not impulses: four coplanar corners share a load in many
-    ways, so their impulses can keep trading while the body's velocity has
-    long settled. A layer also stops when its change has stalled (STALL).
-    Without `every`, the first sweep too updates only the manifolds of
-    bodies marked moved (for sweep clock + 1). Returns the sweep count after
-    these sweeps."""
-    R1, I1, M1, MI1 = one_sided
-    levers = take(store, stop - start)
-    for m in range(start, stop):
-        levers[m - start] = _lever(R1, MI1[m, FIRST], MI1[m, COUNT])
+    levers = take(store, len(MI1))
+    for m in range(len(MI1)):
+        levers[m] = _lever(R1, MI1[m, FIRST], MI1[m, COUNT])
     last = earlier = math.inf
-    for p in range(passes):
-        clock += 1
-        change = _sweep(one_sided, start, stop, vel, omega, levers, tolerance, moved, clock,
-                        every and p == 0)
+    for _ in range(passes):
+        change = 0.0
+        for m in range(len(MI1)):
+            change = max(change, _update(R1, I1, M1, MI1, m, vel, omega, levers[m]))
         if tolerance > 0.0 and change < tolerance:
             break
         if change > STALL * earlier:
             break
         earlier, last = last, change
-    return clock
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _scatter_impulses(R, M, MI, order, one_sided):
     """The settled λ of the compact rows and anchors (_one_sided of `order`)
     back into R and M."""
@@ -475,85 +447,18 @@ def _scatter_impulses(R, M, MI, order, one_sided):
 
 
 @njit(cache=True, inline="always")
-def _kinetic_energy(bodies, vel, omega, masses):
-    """Σ ½ m |v|² + ½ ω·I ω over `bodies` (COURSE.md 3; masses = (1/m,
-    body-frame diagonal I⁻¹, orientations); 1/m = 0: immovable, no energy)."""
+def _kinetic_energy(i, vel, omega, masses):
+    """½ m |v|² + ½ ω·I ω of body i (COURSE.md 3; masses = (1/m, body-frame
+    diagonal I⁻¹, orientations); 1/m = 0: immovable, no energy)."""
     inv_mass, inv_inertia, quat = masses
-    e = 0.0
-    for i in bodies:
-        if inv_mass[i] > 0.0:
-            e += 0.5 * (vel[i, 0] ** 2 + vel[i, 1] ** 2 + vel[i, 2] ** 2) / inv_mass[i]
-            w = rotate_inverse_one(row4(quat, i), (omega[i, 0], omega[i, 1], omega[i, 2]))
-            for j in range(3):
-                if inv_inertia[i, j] > 0.0:
-                    e += 0.5 * w[j] * w[j] / inv_inertia[i, j]
+    if not inv_mass[i] > 0.0:
+        return 0.0
+    e = 0.5 * (vel[i, 0] ** 2 + vel[i, 1] ** 2 + vel[i, 2] ** 2) / inv_mass[i]
+    w = rotate_inverse_one(row4(quat, i), (omega[i, 0], omega[i, 1], omega[i, 2]))
+    for j in range(3):
+        if inv_inertia[i, j] > 0.0:
+            e += 0.5 * w[j] * w[j] / inv_inertia[i, j]
     return e
-
-
-@njit(cache=True, inline="always")
-def _upper_bodies(I, MI, order, layer, g, e, mark, store):
-    """The bodies of the higher layer of manifolds order[g:e], each once
-    (mark: (n,) False on entry and on return)."""
-    out = take_ints(store, e - g)
-    k = 0
-    for m in range(g, e):
-        i = _upper(I, MI, order[m], layer)
-        if not mark[i]:
-            mark[i] = True
-            out[k] = i
-            k += 1
-    for j in range(k):
-        mark[out[j]] = False
-    return out[:k]
-
-
-@njit(cache=True)
-def _settle_resting(tables, order, g, e, vel, omega, layer, masses, moved, clock, tolerance,
-                    resting):
-    """Each upper body of manifolds order[g:e] with all its manifolds there,
-    solved at once if it rests on them (resting_block.py, on the contact
-    tables themselves: it moves the upper body alone). The bodies not solved
-    are marked moved for sweep clock + 1 and the solved ones not moved, so
-    the sweeps that follow start from the others alone. True when every one
-    was (the layer then needs no sweeps). resting = (on, uses (n,) zero on
-    entry and on return, the solve's workspace, room for one body's
-    manifolds)."""
-    _, uses, ws, ms = resting
-    _, I, _, MI = tables
-    for m in range(g, e):
-        uses[_upper(I, MI, order[m], layer)] += 1
-    solved = True
-    for m in range(g, e):
-        body = _upper(I, MI, order[m], layer)
-        if uses[body] < 0:
-            continue                     # solved or given up with an earlier manifold of it
-        k = _body_manifolds(MI, I, order, m, e, layer, body, uses[body], ms)
-        if k == 0 or not settle_resting(tables, ms[:k], body, vel, omega, masses, tolerance, ws):
-            solved = False
-            moved[body] = clock + 1
-        else:
-            moved[body] = -1             # at rest on its supports: no sweep need visit it
-        uses[body] = -1
-    for m in range(g, e):
-        uses[_upper(I, MI, order[m], layer)] = 0
-    return solved
-
-
-@njit(cache=True, inline="always")
-def _body_manifolds(MI, I, order, m, e, layer, body, count, ms):
-    """ms[:k] ← manifold order[m] and the `count` − 1 after it in `order` (up
-    to e) whose upper body is `body`; k, or 0 when they cannot be solved
-    together (more than ms holds, or order[m] has a single point)."""
-    if count > len(ms) or MI[order[m], COUNT] < 2:
-        return 0
-    k = 0
-    for q in range(m, e):
-        if _upper(I, MI, order[q], layer) == body:
-            ms[k] = order[q]
-            k += 1
-            if k == count:
-                break
-    return k
 
 
 @njit(cache=True, inline="always")
@@ -561,6 +466,16 @@ def _upper(I, MI, m, layer):
     """The body of manifold m in the higher layer."""
     a, b = I[MI[m, FIRST], BODY_A], I[MI[m, FIRST], BODY_B]
     return a if layer[a] > layer[b] else b
+
+
+@njit(cache=True, inline="always")
+def _run_end(I, MI, ms, s, layer):
+    """The end of the run of manifolds ms[s:] holding up the same body (_upward_order)."""
+    body = _upper(I, MI, ms[s], layer)
+    t = s + 1
+    while t < len(ms) and _upper(I, MI, ms[t], layer) == body:
+        t += 1
+    return t
 
 
 @njit(cache=True, inline="always")
@@ -573,10 +488,11 @@ def _swap(T, i, at, saved, j, put_back):
             saved[j, r] = T[i, at + r]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _lambdas(R, M, MI, ms, saved, put_back):
     """The λ of manifolds ms's rows and anchors into `saved` ((rows + anchors,
-    3): each manifold's rows, then its anchor), or back from it (put_back)."""
+    3): each manifold's rows, then its anchor), or back from it (put_back).
+    Returns the entries used."""
     j = 0
     for k in ms:
         first, count = MI[k, FIRST], MI[k, COUNT]
@@ -586,59 +502,71 @@ def _lambdas(R, M, MI, ms, saved, put_back):
         if count >= 2:                   # a single point has no anchor (_one_sided)
             _swap(M, k, M_LAM, saved, j, put_back)
             j += 1
+    return j
 
 
-@njit(cache=True)
-def _layer_sweeps(tables, ms, vel, omega, passes, tolerance, moved, clock, layer, every,
-                  store):
-    """_settle on the one-sided copies of manifolds ms (one layer's), made
-    here, their λ put back into the tables after; returns the clock."""
+@njit(cache=True, inline="always")
+def _settle_body(tables, ms, body, vel, omega, passes, tolerance, layer, masses, resting,
+                 store):
+    """Body `body` settled on its manifolds ms with the layer below: at once
+    when it rests on them (resting_block.py, on the contact tables
+    themselves: it moves the upper body alone), else by sweeps (_settle) on
+    one-sided copies of them, their λ put back after. The copies are given
+    back to the scratch when done (scratch.rewind): the next body's reuse
+    the same memory, still in cache."""
     R, I, M, MI = tables
+    block, ws = resting
+    # a single point is never taken (resting_block._takes_part): not called for one
+    if (block and len(ms) <= MANIFOLDS and MI[ms[0], COUNT] >= 2
+            and settle_resting(tables, ms, body, vel, omega, masses, tolerance, ws)):
+        return
+    mark = cursor(store)
     one_sided = _one_sided(R, I, M, MI, layer, ms, store)
     _frozen_masses(one_sided, 0, len(ms), take_rows(store, 3, 3))
-    clock = _settle(one_sided, 0, len(ms), vel, omega, passes, tolerance, moved, clock, every,
-                    store)
+    _settle(one_sided, vel, omega, passes, tolerance, store)
     _scatter_impulses(R, M, MI, ms, one_sided)
-    return clock
+    rewind(store, mark)
 
 
 @njit(cache=True)
-def _settle_guarded(tables, order, g, e, vel, omega, passes, tolerance, moved, clock, layer,
-                    masses, mark, resting, store):
-    """One layer (manifolds order[g:e]) settled, undone if it gave the
-    layer's bodies kinetic energy: resting on what holds it removes approach
-    and slip, so a layer that gains energy was made to follow a support it
-    cannot follow (a box on two boxes moving apart, a box turning under
-    another): its velocities and λ are put back. The resting solve works on
-    the tables themselves; only a layer with a body it left unsolved is
-    copied into one-sided tables for its sweeps (_layer_sweeps). Returns
-    the clock."""
+def _settle_layer(tables, ms, vel, omega, passes, tolerance, layer, masses, resting, store):
+    """One layer (manifolds ms, in runs of one upper body: _upward_order)
+    settled body by body (_settle_body: with the layer below immovable, its
+    bodies share no movable one), undone if it gave the layer's bodies
+    kinetic energy: resting on what holds it removes approach and slip, so
+    a layer that gains energy was made to follow a support it cannot
+    follow (a box on two boxes moving apart, a box turning under another):
+    its velocities and λ are put back (each body's saved just before it is
+    settled, while its rows are in cache)."""
     R, I, M, MI = tables
-    upper = _upper_bodies(I, MI, order, layer, g, e, mark, store)
-    saved = take_rows(store, len(upper), 6)
-    for k in range(len(upper)):
-        for j in range(3):
-            saved[k, j], saved[k, 3 + j] = vel[upper[k], j], omega[upper[k], j]
-    lam = take_rows(store, (e - g) + _row_count(MI, order[g:e]), 3)
-    _lambdas(R, M, MI, order[g:e], lam, False)
-    before = _kinetic_energy(upper, vel, omega, masses)
-    # with the resting solve on, the sweeps start from the bodies it left (every=False)
-    if not resting[0] or not _settle_resting(tables, order, g, e, vel, omega, layer, masses,
-                                             moved, clock, tolerance, resting):
-        clock = _layer_sweeps(tables, order[g:e], vel, omega, passes, tolerance, moved, clock,
-                              layer, not resting[0], store)
-    if _kinetic_energy(upper, vel, omega, masses) > before * (1.0 + GAIN) + 1e-300:
-        for k in range(len(upper)):
-            for j in range(3):
-                vel[upper[k], j], omega[upper[k], j] = saved[k, j], saved[k, 3 + j]
-        _lambdas(R, M, MI, order[g:e], lam, True)
-    return clock
+    bodies, saved = take_ints(store, len(ms)), take_rows(store, len(ms), 6)
+    lam = take_rows(store, len(ms) + _row_count(MI, ms), 3)
+    before = after = 0.0
+    s = j = count = 0
+    while s < len(ms):
+        t = _run_end(I, MI, ms, s, layer)
+        body = _upper(I, MI, ms[s], layer)
+        bodies[count] = body
+        for i in range(3):
+            saved[count, i], saved[count, 3 + i] = vel[body, i], omega[body, i]
+        count += 1
+        j += _lambdas(R, M, MI, ms[s:t], lam[j:], False)
+        before += _kinetic_energy(body, vel, omega, masses)
+        _settle_body(tables, ms[s:t], body, vel, omega, passes, tolerance, layer, masses,
+                     resting, store)
+        after += _kinetic_energy(body, vel, omega, masses)
+        s = t
+    if after > before * (1.0 + GAIN) + 1e-300:
+        for k in range(count):
+            for i in range(3):
+                vel[bodies[k], i], omega[bodies[k], i] = saved[k, i], saved[k, 3 + i]
+        _lambdas(R, M, MI, ms, lam, True)
 
 
 @njit(cache=True)
 def shock_sweep(R, I, M, MI, vel, omega, n, passes, tolerance, masses, block, unsettled, store):
     """The ordered one-sided sweep (module docstring), layer after layer from
-    the ground up, each settled in turn (`_settle_guarded`; with `block`, a
+    the ground up, each settled in turn (`_settle_layer`; with `block`, a
     body resting on one support through three or more points at once,
     resting_block.py), over the groups of bodies the sweeps left unsettled
     (leave_out_settled); the rows' and anchors' λ updated in place. Returns
@@ -653,21 +581,13 @@ def shock_sweep(R, I, M, MI, vel, omega, n, passes, tolerance, masses, block, un
             and leave_out_settled(I, MI, layer, graph, unsettled, store) == 0):
         return 0, layer
     order, top = _upward_order(I, MI, layer, store)
-    moved = take_ints(store, n)
-    moved[:] = -1
-    mark = take_bools(store, n)
-    mark[:] = False
-    uses = take_ints(store, n)
-    uses[:] = 0
-    resting = (block, uses, take_rows(store, WS_SHAPE[0], WS_SHAPE[1]),
-               take_ints(store, MANIFOLDS))
-    clock = 0
+    resting = (block, take_rows(store, WS_SHAPE[0], WS_SHAPE[1]))
     g = 0
     while g < len(order):
         e = g + 1
         while e < len(order) and top[e] == top[g]:
             e += 1
-        clock = _settle_guarded((R, I, M, MI), order, g, e, vel, omega, passes, tolerance, moved,
-                                clock, layer, masses, mark, resting, store)
+        _settle_layer((R, I, M, MI), order[g:e], vel, omega, passes, tolerance, layer, masses,
+                      resting, store)
         g = e
     return len(order), layer
