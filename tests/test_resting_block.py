@@ -48,7 +48,7 @@ def one_sided_manifolds(w):
                      np.empty(len(MI)))
     store[1][CURSOR] = 0
     layer, _ = SP.support_layers(R, I, MI, len(vel), store)
-    order, _ = SP._upward_order(I, MI, layer, store)
+    order, _, _ = SP._upward_order(I, MI, layer, store)
     one_sided = tuple(np.array(x) for x in SP._one_sided(R, I, M, MI, layer, order, store))
     return one_sided, vel, omega, (w._inv_mass, w.inv_inertia, quat)
 

@@ -25,7 +25,7 @@ def _reference(I, MI, layer):
     rank = np.where((lo == SP.UNREACHED) | (lo == top), SP.UNREACHED, top * (n + 1) + upper)
     order = np.argsort(rank, kind="mergesort")
     order = order[rank[order] != SP.UNREACHED]
-    return order, top[order]
+    return order, top[order], upper[order]
 
 
 @settings(max_examples=300, deadline=None)
@@ -44,10 +44,11 @@ def test_upward_order_is_the_stable_sort_by_layers(seed, n, manifolds, unreached
         I[pick, BODY_B] = rng.choice(members, pick.sum()) if pick.any() else []
     MI = np.zeros((manifolds, MICOL), np.int64)
     MI[:, FIRST] = np.arange(manifolds)
-    order, tops = SP._upward_order(I, MI, layer, empty_store())
-    want_order, want_tops = _reference(I, MI, layer)
+    order, tops, uppers = SP._upward_order(I, MI, layer, empty_store())
+    want_order, want_tops, want_uppers = _reference(I, MI, layer)
     assert np.array_equal(order, want_order)
     assert np.array_equal(tops, want_tops)
+    assert np.array_equal(uppers, want_uppers)
 
 
 def test_a_manifold_with_one_body_unreached_is_left_out():
@@ -57,5 +58,5 @@ def test_a_manifold_with_one_body_unreached_is_left_out():
     I = np.array([[0, 1, 0], [1, 2, 0], [3, 1, 0]], np.int64)
     MI = np.zeros((3, MICOL), np.int64)
     MI[:, FIRST] = np.arange(3)
-    order, tops = SP._upward_order(I, MI, layer, empty_store())
-    assert order.tolist() == [0, 2] and tops.tolist() == [1, 2]
+    order, tops, uppers = SP._upward_order(I, MI, layer, empty_store())
+    assert order.tolist() == [0, 2] and tops.tolist() == [1, 2] and uppers.tolist() == [1, 3]

@@ -328,10 +328,11 @@ def _one_sided(R, I, M, MI, layer, order, store):
 
 @njit(cache=True)
 def _upward_order(I, MI, layer, store):
-    """(order, top): the manifolds between two layers (touching something
-    immovable), by (higher layer, the body in it, key order) (two stable
-    counting sorts: deterministic), and the higher layer of each: a layer's
-    manifolds come in runs, one run for each body they hold up."""
+    """(order, top, upper): the manifolds between two layers (touching
+    something immovable), by (higher layer, the body in it, key order) (two
+    stable counting sorts: deterministic), the higher layer of each and its
+    body there: a layer's manifolds come in runs, one run for each body
+    they hold up."""
     top, up = take_ints(store, len(MI)), take_ints(store, len(MI))
     between = take_ints(store, len(MI))
     m = 0
@@ -344,10 +345,10 @@ def _upward_order(I, MI, layer, store):
             m += 1
     order = _counting_order(_counting_order(between[:m], up, len(layer), store), top,
                             len(layer), store)
-    tops = take_ints(store, m)
+    tops, uppers = take_ints(store, m), take_ints(store, m)
     for s in range(m):
-        tops[s] = top[order[s]]
-    return order, tops
+        tops[s], uppers[s] = top[order[s]], up[order[s]]
+    return order, tops, uppers
 
 
 @njit(cache=True)
@@ -462,18 +463,11 @@ def _kinetic_energy(i, vel, omega, masses):
 
 
 @njit(cache=True, inline="always")
-def _upper(I, MI, m, layer):
-    """The body of manifold m in the higher layer."""
-    a, b = I[MI[m, FIRST], BODY_A], I[MI[m, FIRST], BODY_B]
-    return a if layer[a] > layer[b] else b
-
-
-@njit(cache=True, inline="always")
-def _run_end(I, MI, ms, s, layer):
-    """The end of the run of manifolds ms[s:] holding up the same body (_upward_order)."""
-    body = _upper(I, MI, ms[s], layer)
+def _run_end(uppers, s):
+    """The end of the run from s of manifolds holding up the same body
+    (uppers: each one's body, _upward_order)."""
     t = s + 1
-    while t < len(ms) and _upper(I, MI, ms[t], layer) == body:
+    while t < len(uppers) and uppers[t] == uppers[s]:
         t += 1
     return t
 
@@ -529,8 +523,9 @@ def _settle_body(tables, ms, body, vel, omega, passes, tolerance, layer, masses,
 
 
 @njit(cache=True)
-def _settle_layer(tables, ms, vel, omega, passes, tolerance, layer, masses, resting, store):
-    """One layer (manifolds ms, in runs of one upper body: _upward_order)
+def _settle_layer(tables, ms, uppers, vel, omega, passes, tolerance, layer, masses, resting,
+                  store):
+    """One layer (manifolds ms, in runs of one upper body, uppers: _upward_order)
     settled body by body (_settle_body: with the layer below immovable, its
     bodies share no movable one), undone if it gave the layer's bodies
     kinetic energy: resting on what holds it removes approach and slip, so
@@ -544,8 +539,8 @@ def _settle_layer(tables, ms, vel, omega, passes, tolerance, layer, masses, rest
     before = after = 0.0
     s = j = count = 0
     while s < len(ms):
-        t = _run_end(I, MI, ms, s, layer)
-        body = _upper(I, MI, ms[s], layer)
+        t = _run_end(uppers, s)
+        body = uppers[s]
         bodies[count] = body
         for i in range(3):
             saved[count, i], saved[count, 3 + i] = vel[body, i], omega[body, i]
@@ -580,14 +575,14 @@ def shock_sweep(R, I, M, MI, vel, omega, n, passes, tolerance, masses, block, un
     if (unsettled_count < len(MI)
             and leave_out_settled(I, MI, layer, graph, unsettled, store) == 0):
         return 0, layer
-    order, top = _upward_order(I, MI, layer, store)
+    order, top, uppers = _upward_order(I, MI, layer, store)
     resting = (block, take_rows(store, WS_SHAPE[0], WS_SHAPE[1]))
     g = 0
     while g < len(order):
         e = g + 1
         while e < len(order) and top[e] == top[g]:
             e += 1
-        _settle_layer((R, I, M, MI), order[g:e], vel, omega, passes, tolerance, layer, masses,
-                      resting, store)
+        _settle_layer((R, I, M, MI), order[g:e], uppers[g:e], vel, omega, passes, tolerance,
+                      layer, masses, resting, store)
         g = e
     return len(order), layer
