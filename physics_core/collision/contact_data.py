@@ -76,15 +76,15 @@ def contact_params(p, integrator="semi_implicit_euler"):
 
 
 def new_warm_cache():
-    """(keys, values): typed lists, so compiled code can replace the arrays
-    (the contact set changes size) and the World keeps them. Item 0 is the
-    cache (ascending keys, their values); item 1 the buffers it is a view
-    of (warm_cache.warm_store fills them in place, growing them by doubling)."""
+    """(keys, values): typed lists of one array each, so compiled code can
+    replace the arrays (the contact set grows) and the World keeps them.
+    keys[0][0] is the number of contacts kept, their ascending keys follow;
+    values[0] has their values in its first rows (warm_cache.warm_store
+    fills them in place, growing the arrays by doubling)."""
     keys = typed.List.empty_list(types.Array(types.int64, 1, "C"))
     values = typed.List.empty_list(types.Array(types.float64, 2, "C"))
-    for _ in range(2):
-        keys.append(np.zeros(0, np.int64))
-        values.append(np.zeros((0, WARM_COLS)))
+    keys.append(np.zeros(1, np.int64))
+    values.append(np.zeros((0, WARM_COLS)))
     return keys, values
 
 

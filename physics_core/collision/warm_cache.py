@@ -61,43 +61,53 @@ def load_warm(R, I, key, old_key, old, fraction, static_speed, vel0, omega0):
         R[c, MU] = R[c, MU_K] if sliding else R[c, MU_S]
 
 
+@njit(cache=True, inline="always")
+def cached(cache_keys, cache_values):
+    """(keys, values) of the contacts kept: views of the cache's arrays, the
+    keys' first element holding their count (contact_data.new_warm_cache)."""
+    keys, values = cache_keys[0], cache_values[0]
+    return keys[1:keys[0] + 1], values[:keys[0]]
+
+
 @njit(cache=True)
 def warm_load(R, I, key, cache_keys, cache_values, fraction, static_speed, vel0, omega0):
-    load_warm(R, I, key, cache_keys[0], cache_values[0], fraction, static_speed, vel0, omega0)
+    old_key, old = cached(cache_keys, cache_values)
+    load_warm(R, I, key, old_key, old, fraction, static_speed, vel0, omega0)
 
 
 @njit(cache=True)
 def warm_store(cache_keys, cache_values, key, R, friction, slip):
-    """Keep this substep's impulses, friction vectors and slip speeds by key,
-    in views of the cache's buffers (item 1 of each list, grown by doubling):
-    the old entries were read by warm_load already, so they are overwritten."""
+    """Keep this substep's impulses, friction vectors and slip speeds by key in
+    the cache's arrays (grown by doubling; the old entries were read by
+    warm_load already, so they are overwritten), their count first."""
     keys, values = _buffers(cache_keys, cache_values, len(key))
+    keys[0] = len(key)
     for c in range(len(key)):
-        keys[c] = key[c]
+        keys[1 + c] = key[c]
         values[c, WARM_NORMAL] = R[c, LAM]
         for i in range(3):
             values[c, WARM_FRICTION + i] = friction[c, i]
         values[c, WARM_SLIP] = slip[c]
-    cache_keys[0] = keys[:len(key)]
-    cache_values[0] = values[:len(key)]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _buffers(cache_keys, cache_values, k):
-    """The cache's buffers (list item 1), replaced by ones of at least 2× the
-    rows when they hold fewer than k."""
-    if len(cache_keys[1]) < k:
-        size = max(k, 2 * len(cache_keys[1]))
-        cache_keys[1] = np.empty(size, np.int64)
-        cache_values[1] = np.empty((size, WARM_COLS))
-    return cache_keys[1], cache_values[1]
+    """The cache's arrays, replaced by ones of at least 2× the rows when they
+    hold fewer than k (a typed list's item is read and written through
+    numba's C helpers, about 30 ns each: once each a substep, not more)."""
+    keys, values = cache_keys[0], cache_values[0]
+    if len(values) < k:
+        size = max(k, 2 * len(values))
+        keys, values = np.empty(size + 1, np.int64), np.empty((size, WARM_COLS))
+        cache_keys[0] = keys
+        cache_values[0] = values
+    return keys, values
 
 
 @njit(cache=True)
 def warm_clear(cache_keys, cache_values):
-    keys, values = _buffers(cache_keys, cache_values, 0)
-    cache_keys[0] = keys[:0]
-    cache_values[0] = values[:0]
+    keys = cache_keys[0]
+    keys[0] = 0
 
 
 @njit(cache=True)
@@ -120,6 +130,7 @@ def remap_keys(key, n_old, n_new, new_index, slots):
 
 def remap_warm_cache(cache_keys, cache_values, n_old, n_new, new_index, slots):
     """The cache for the same contacts after a change of the body set."""
-    key, kept = remap_keys(cache_keys[0], n_old, n_new, new_index, slots)
-    cache_keys[0] = np.ascontiguousarray(key[kept])
-    cache_values[0] = np.ascontiguousarray(cache_values[0][kept])
+    old_key, old = cached(cache_keys, cache_values)
+    key, kept = remap_keys(old_key, n_old, n_new, new_index, slots)
+    cache_keys[0] = np.concatenate(([np.int64(kept.sum())], key[kept]))
+    cache_values[0] = np.ascontiguousarray(old[kept])
