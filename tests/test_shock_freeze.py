@@ -1,7 +1,7 @@
 """Freezing one side of a contact row for the shock-propagation sweep
 (shock_propagation._freeze_row, _freeze_anchor): the lower body made
-immovable; the row's effective masses computed again when a layer's sweeps
-need them (_row_masses, _frozen_masses; a layer the resting solve settles
+immovable; the row's effective masses computed again when a body's sweeps
+need them (_row_masses, _frozen_masses; a body the resting solve settles
 never reads them).
 
 Every number the sweeps read must be what the full recompute gives: a side

@@ -58,7 +58,7 @@ from .pair_velocity import load_pair, store_pair
 from .sequential_impulses import manifold_update
 
 UNREACHED = np.int64(1) << 40
-# A layer's sweeps have stalled when a sweep's change is above this fraction
+# A body's sweeps have stalled when a sweep's change is above this fraction
 # of the change two sweeps before: a body on several supports can trade
 # impulses between them in a cycle that more sweeps do not end (a pyramid's
 # box on two boxes kept changing by 7.35e-4 m/s a sweep from its third sweep
@@ -68,7 +68,7 @@ UNREACHED = np.int64(1) << 40
 # (sequential_impulses.solve_velocities).
 STALL = 0.9
 # A layer's settle may not raise its bodies' kinetic energy by more than this
-# fraction (_settle_guarded). Measured: converging a box sliding on the floor
+# fraction (_settle_layer). Measured: converging a box sliding on the floor
 # raises it by up to 1e-6 (its normal impulses re-balanced); the layers of a
 # 300-box pyramid that were thrown off gained 2.5 % (median), 9 % (90th
 # percentile), 69 % at most, per substep
@@ -267,13 +267,13 @@ def _row_masses(R, c, anchored):
 
 
 @njit(cache=True, inline="always")
-def _frozen_masses(one_sided, g, e, w):
-    """The effective masses of manifolds g..e's rows and anchors, their lower
-    side frozen (_one_sided): what the layer's sweeps read. The resting
-    solve (resting_block.py) reads none of them, so a layer it settles
+def _frozen_masses(one_sided, w):
+    """The effective masses of the one-sided copies' rows and anchors, their
+    lower side frozen (_one_sided): what a body's sweeps read. The resting
+    solve (resting_block.py) reads none of them, so a body it settles
     never computes them. w: (3, 3) scratch."""
     R1, I1, M1, MI1 = one_sided
-    for m in range(g, e):
+    for m in range(len(MI1)):
         first, count = MI1[m, FIRST], MI1[m, COUNT]
         for c in range(first, first + count):
             _row_masses(R1, c, count >= 2)
@@ -300,8 +300,9 @@ def _row_count(MI, ms):
 @njit(cache=True, inline="always")
 def _one_sided(R, I, M, MI, layer, order, store):
     """Compact copies (R1, I1, M1, MI1) of the manifolds of `order` (one
-    layer's, for its sweeps), in that order, with the lower layer's side of
-    every row immovable (the effective masses as they were: _frozen_masses).
+    body's with the layer below, for its sweeps), in that order, with the
+    lower layer's side of every row immovable (the effective masses as they
+    were: _frozen_masses).
     A single point has no friction anchor (manifold_friction.py): its M1 row
     is left unwritten, and _scatter_impulses does not read it."""
     rows = _row_count(MI, order)
@@ -340,7 +341,7 @@ def _upward_order(I, MI, layer, store):
         a, b = I[MI[k, FIRST], BODY_A], I[MI[k, FIRST], BODY_B]
         la, lb = layer[a], layer[b]
         top[k], up[k] = max(la, lb), (a if la > lb else b)
-        if top[k] != UNREACHED and min(la, lb) != top[k]:   # both reached (so lo is), apart
+        if top[k] != UNREACHED and min(la, lb) != top[k]:   # both reached, apart
             between[m] = k
             m += 1
     order = _counting_order(_counting_order(between[:m], up, len(layer), store), top,
@@ -516,7 +517,7 @@ def _settle_body(tables, ms, body, vel, omega, passes, tolerance, layer, masses,
         return
     mark = cursor(store)
     one_sided = _one_sided(R, I, M, MI, layer, ms, store)
-    _frozen_masses(one_sided, 0, len(ms), take_rows(store, 3, 3))
+    _frozen_masses(one_sided, take_rows(store, 3, 3))
     _settle(one_sided, vel, omega, passes, tolerance, store)
     _scatter_impulses(R, M, MI, ms, one_sided)
     rewind(store, mark)
