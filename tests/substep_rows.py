@@ -12,7 +12,7 @@ def rows_before_solve(w, dt, g=9.81):
     dt, the collision pass applied: what the sweeps start from."""
     cs, s = w.contact_system, w.state
     cm, fp, ip = cs.cm, cs.fp, cs.ip
-    store = (np.empty(1 << 18), new_counts())
+    store = (np.empty(1 << 18), new_counts(), np.empty(0))
     pos, quat, vel, omega = s.pos.copy(), s.quat.copy(), s.vel.copy(), s.omega.copy()
     moving = cm.inv_mass > 0
     vel[:, 2] -= g * dt * moving

@@ -9,7 +9,6 @@ import glob
 import math
 import os
 import warnings
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -21,10 +20,11 @@ from physics_core import quaternion as qt
 from numpy_reference.broadphase import candidate_pairs as numpy_pairs
 from physics_core.collision.detection import Detector, signed_depths
 from physics_core.collision.geometry import Geometry
-from physics_core.collision.grid import candidate_pairs
+from physics_core.collision.broad_phase import candidate_pairs
 from numpy_reference.narrowphase import collide, signed_depth
+from random_fields import jiggled, mixed_scene
 from physics_core.scene_loader import build_model
-from physics_core.shapes import BOX, PLANE, SPHERE
+from physics_core.shapes import PLANE
 
 TOL = 1e-12
 FIELDS = ("a", "b", "key", "point", "normal", "depth")
@@ -49,14 +49,6 @@ def assert_same_contacts(model, pos, quat, margin):
         np.testing.assert_allclose(getattr(got, f), getattr(ref, f), rtol=0, atol=TOL, err_msg=f)
     assert np.all(np.diff(got.key) > 0), "sorted by key, keys unique"
     return ref, got
-
-
-def jiggled(pos, quat, static, rng, shift, turn):
-    """Poses moved and turned a little (static bodies stay)."""
-    move = ~static[:, None]
-    pos = pos + rng.normal(0.0, shift, pos.shape) * move
-    spin = qt.from_rotation_vector(rng.normal(0.0, turn, pos.shape) * move)
-    return pos, qt.normalize(qt.multiply(spin, quat))
 
 
 # ---- scene files ----------------------------------------------------------------------
@@ -224,21 +216,6 @@ def test_a_non_finite_pose_is_reported_not_propagated():
 
 
 # ---- broad phase ----------------------------------------------------------------------
-
-def mixed_scene(rng, n, spread, n_planes, big_fraction, static_fraction=0.2):
-    """The fields of a Model that detection reads (as test_broadphase.random_scene):
-    spheres and boxes, some 20× larger, some static; planes with random normals."""
-    kind = rng.choice([SPHERE, BOX], size=n)
-    kind[:n_planes] = PLANE
-    size = rng.uniform(0.05, 0.5, n) * np.where(rng.random(n) < big_fraction, 20.0, 1.0)
-    normal = qt.normalize(rng.normal(size=(n, 3)))
-    model = SimpleNamespace(
-        n=n, shape_type=kind, radius=size,
-        half_extents=np.stack([size * rng.uniform(0.2, 1.0, n) for _ in range(3)], axis=1),
-        is_static=(rng.random(n) < static_fraction) | (kind == PLANE),
-        plane_normal=normal, plane_offset=rng.uniform(-spread, 0.0, n))
-    return model, rng.uniform(-spread, spread, (n, 3)), qt.normalize(rng.normal(size=(n, 4)))
-
 
 @settings(max_examples=100, deadline=None)
 @given(seed=st.integers(0, 2 ** 32 - 1), n=st.integers(1, 80), spread=st.floats(0.3, 10.0),

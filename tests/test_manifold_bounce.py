@@ -141,7 +141,7 @@ def _rows_at_landing(w, dt):
     from physics_core.collision import contact_stages as CS
     from physics_core.collision.scratch import new_counts
     cs, s = w.contact_system, w.state
-    store = (np.empty(1 << 18), new_counts())
+    store = (np.empty(1 << 18), new_counts(), np.empty(0))
     pos, quat, vel, omega = s.pos.copy(), s.quat.copy(), s.vel.copy(), s.omega.copy()
     pos += vel * dt * (cs.cm.inv_mass > 0)[:, None]
     found = CS.detect_stage(cs.cm, cs.fp, cs.ip, pos, quat, s.awake, cs.sleep, cs.cap[0], store)

@@ -8,7 +8,7 @@ each stage a function of contact_stages.py:
     ccd          – (ccd: true) fast bodies: time of impact by sampling and
                    bisection along the substep (time_of_impact.py); a body
                    that hits is moved back to its time of impact pose
-    collide      – broad phase (grid.py) and narrow phase (shape_pairs.py,
+    collide      – broad phase (broad_phase.py) and narrow phase (shape_pairs.py,
                    box_pair.py, detection.py) at the end-of-substep poses,
                    sleeping bodies that are touched woken (sleep_islands.py),
                    contact rows (contact_build.py, contact_layout.py) warm-

@@ -15,7 +15,7 @@ from .contact_data import contact_model, contact_params, new_sleep_state, new_wa
 from .contact_substep import STAGE_NAMES
 from .event_log import events_bodies_changed, events_output, new_event_state
 from .manifold import SLOTS
-from .scratch import new_counts, new_scratch
+from .scratch import KEPT, new_counts, new_scratch
 from .warm_cache import remap_warm_cache
 
 
@@ -59,6 +59,7 @@ class ContactSystem:
         self.events_state = old.events_state
         events_bodies_changed(self.events_state, n_old, n_new, new_index)
         self.cap = old.cap
+        self.cap[KEPT] = -1             # the kept broad-phase pairs name the old bodies
         self.scratch = old.scratch      # grown as needed: any size serves
 
 

@@ -6,7 +6,7 @@ point, the normal that separates the bodies, and the depth).
 manifold.detect(model, pos, quat, margin) returns, under the Manifold
 contract (manifold.py): rows with depth > -margin, `a` static or the lower
 index, normal from a to b, key = pair_id * SLOTS + slot, sorted by key,
-keys unique. The pairs come from grid.py sorted by pair id and each kernel
+keys unique. The pairs come from broad_phase.py sorted by pair id and each kernel
 writes its rows in slot order, so the rows come out sorted. Rows go to a
 buffer that doubles when full; the kept ones are copied out at the end.
 
@@ -25,7 +25,8 @@ from ..borrowed import borrow, keep_alive
 from ..errors import NonFiniteStateError
 from .box_pair import WS_ROWS, box_box, separation, workspace
 from .geometry import BOX, PLANE, Geometry
-from .grid import candidate_pairs, finite_poses, scratch_pairs
+from .broad_phase import candidate_pairs, scratch_pairs
+from .grid import finite_poses
 from .manifold import SLOTS, Manifold
 from .scratch import take, take_ints, take_rows
 from .shape_pairs import (DEPTH, NORMAL_COL, POINT, ROW, SLOT, box_sphere, plane_box, plane_sphere,

@@ -1,10 +1,9 @@
-"""Compiled broad phase: the pairs of bodies that may touch (COURSE.md 5:
-the cheap first half of detecting a collision; the narrow phase decides).
-
-`candidate_pairs(kind, dims, is_static, reach, pos, quat, margin)` gives
-the pairs broadphase.candidate_pairs gives, in the Manifold order (static
-body, else the lower index, as `a`; static–static pairs never appear),
-sorted by pair id min(a, b) n + max(a, b):
+"""The broad phase's grid, sweep and plane tests (COURSE.md 5: the cheap
+first half of detecting a collision; the narrow phase decides), run by
+broad_phase.py, whose `candidate_pairs(kind, dims, is_static, reach, pos,
+quat, margin)` gives the pairs the numpy reference broadphase.candidate_pairs
+gives, in the Manifold order (static body, else the lower index, as `a`;
+static–static pairs never appear), sorted by pair id min(a, b) n + max(a, b):
 
 - solid pairs need overlapping margin-grown AABBs and bounding spheres
   (|c_a - c_b| <= R_a + R_b + margin), tested with broadphase._filter's
@@ -32,10 +31,9 @@ import math
 import numpy as np
 from numba import njit
 
-from ..borrowed import borrow, keep_alive
 from .geometry import (BOX, HALF, NORMAL, OFFSET, PLANE, RADIUS, dot_lanes, dot_seq, fma,
                        quat_matrix)
-from .scratch import PAIR_GUESS, empty_store, take, take_bools, take_int_rows, take_ints, take_rows
+from .scratch import take, take_bools, take_int_rows, take_ints, take_rows
 
 SMALL_FACTOR = 4.0          # a body more than this × the median AABB extent is "large"
 MAX_CELLS = 2 ** 20         # grid cells per axis at most; a wider scene gets a coarser grid
@@ -570,81 +568,3 @@ def finite_poses(kind, pos, quat):
             ok &= (np.isfinite(quat[b, 0]) & np.isfinite(quat[b, 1]) & np.isfinite(quat[b, 2])
                    & np.isfinite(quat[b, 3]))
     return ok
-
-
-@njit(cache=True)
-def candidate_pairs(kind, dims, is_static, reach, pos, quat, margin):
-    """(k, 2) int64 pairs (a, b) in Manifold order, sorted by pair id; the
-    poses must be finite (finite_poses)."""
-    bodies = np.flatnonzero(~is_static & (kind != PLANE))
-    found = find_pairs(kind, dims, is_static, reach, pos, quat, margin,
-                       np.flatnonzero(kind != PLANE), np.flatnonzero(kind == PLANE), bodies,
-                       np.empty(len(bodies)), np.empty((max(16, 4 * len(kind)), 2), np.int64),
-                       empty_store())
-    return sort_pairs(found[0], found[1], len(kind))
-
-
-@njit(cache=True)
-def find_pairs(kind, dims, is_static, reach, pos, quat, margin, solid, planes, bodies, gaps, pairs,
-               store):
-    """(pairs, k): the unsorted candidate pairs in `pairs` (grown if short, a
-    new array then); solid, planes, bodies: the solid bodies, the planes,
-    the dynamic solid bodies; gaps: scratch of len(bodies); store: the
-    scratch of the tables made on the way (scratch.py; empty_store() makes
-    them new arrays)."""
-    k = 0
-    if len(solid) >= 2:
-        classes = _classes(kind, dims, reach, pos, quat, margin, solid, store)
-        cols, small, large, cell = borrow(classes)
-        if len(small) >= 2:
-            pairs, k = _grid_pairs(cols, solid, small, cell, is_static, pairs, k, store)
-        if len(large):
-            pairs, k = _large_pairs(cols, solid, large, small, cell, is_static, pairs, k)
-        keep_alive(classes)
-    return _plane_pairs(kind, dims, pos, quat, margin, planes, bodies, gaps, pairs, k)
-
-
-@njit(cache=True, inline="always")
-def scratch_pairs(kind, dims, is_static, reach, pos, quat, margin, store):
-    """candidate_pairs for the step loop, in a view of the scratch store
-    (scratch.py) valid until the next substep's detection."""
-    n = len(kind)
-    solid, planes, bodies = _body_lists(kind, is_static, store)
-    counts = store[1]
-    room = take_int_rows(store, max(16, 4 * n, counts[PAIR_GUESS]), 2)
-    found = find_pairs(kind, dims, is_static, reach, pos, quat, margin, solid, planes, bodies,
-                       take(store, len(bodies)), room, store)
-    pairs, k = borrow(found)
-    counts[PAIR_GUESS] = k + k // 8     # a pair list that grew: room for as many next time
-    start = take_ints(store, n + 2)
-    start[:] = 0
-    out = sort_into(pairs, k, start, take_int_rows(store, k, 2))
-    keep_alive(found)
-    return out
-
-
-@njit(cache=True, inline="always")
-def _body_lists(kind, is_static, store):
-    """(solid, planes, dynamic solid) body indices, ascending, in scratch views."""
-    n = len(kind)
-    solid, planes, bodies = take_ints(store, n), take_ints(store, n), take_ints(store, n)
-    s = p = d = 0
-    for i in range(n):
-        if kind[i] == PLANE:
-            planes[p] = i
-            p += 1
-        else:
-            solid[s] = i
-            s += 1
-            if not is_static[i]:
-                bodies[d] = i
-                d += 1
-    return solid[:s], planes[:p], bodies[:d]
-
-
-@njit(cache=True)
-def _classes(kind, dims, reach, pos, quat, margin, solid, store):
-    """(solid table, small rows, large rows, cell edge) of the solid bodies."""
-    cols = solid_table(kind, dims, reach, pos, quat, margin, solid, take_rows(store, len(solid), COLS))
-    small, large, cell = _classify(cols, store)
-    return cols, small, large, cell
