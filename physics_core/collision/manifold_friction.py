@@ -32,7 +32,7 @@ from .contact_build import start_separation, touch_shift
 from .kinetic_bound import kinetic_bound
 from .contact_layout import (ARM_A, ARM_B, BODY_A, BODY_B, DEPTH, DIR, INV_MASS_A, INV_MASS_B, LAM,
                              MU_K, MU_S, SLIDING, TURN_A, TURN_B, U0)
-from .pair_velocity import load_pair, pair_impulse, pair_velocity, store_pair
+from .pair_velocity import load_pair, pair_impulses, pair_velocity, store_pair
 from .scratch import take, take_int_rows, take_rows
 
 # float columns: per row r (3): linear direction L, angular parts for a and b,
@@ -199,11 +199,10 @@ def anchor_warm_start(M, MI, I, vel, omega):
     for k in range(len(MI)):
         if MI[k, COUNT] >= 2:
             a, b = I[MI[k, FIRST], BODY_A], I[MI[k, FIRST], BODY_B]
-            p = load_pair(vel, omega, a, b)
-            for r in range(2):
-                if M[k, M_LAM + r] != 0.0:
-                    p = pair_impulse(M, k, r, M[k, M_LAM + r], p)
-            store_pair(vel, omega, a, b, p)
+            l0, l1 = M[k, M_LAM], M[k, M_LAM + 1]
+            if l0 != 0.0 or l1 != 0.0:
+                p = pair_impulses(M, k, l0, l1, 0.0, load_pair(vel, omega, a, b))
+                store_pair(vel, omega, a, b, p)
 
 
 @njit(cache=True, inline="always")
@@ -225,9 +224,7 @@ def update_anchor(R, M, k, first, count, sliding, p):
     n2 = old2 - (M[k, o + 6] * u0 + M[k, o + 7] * u1 + M[k, o + 8] * u2)
     n0, n1, n2 = _anchor_cap(M, k, n0, n1, n2, ln, sliding)
     M[k, M_LAM], M[k, M_LAM + 1], M[k, M_LAM + 2] = n0, n1, n2
-    p = pair_impulse(M, k, 0, n0 - old0, p)
-    p = pair_impulse(M, k, 1, n1 - old1, p)
-    p = pair_impulse(M, k, 2, n2 - old2, p)
+    p = pair_impulses(M, k, n0 - old0, n1 - old1, n2 - old2, p)
     return p, max(abs(n0 - old0), max(abs(n1 - old1), abs(n2 - old2)))
 
 

@@ -10,6 +10,14 @@ must assume may overlap). Here they are loaded once per manifold update,
 as a tuple of 12 floats (v_a, ω_a, v_b, ω_b), carried through its rows and
 stored once: the same operations in the same order, so the same bits.
 
+A row update that changes its three impulses at once applies them as one
+(`pair_impulses`): the pair moves by the sum of the three rows' changes,
+v_a −= (Σ_r dλ_r d_r) / m_a, ω_a −= Σ_r dλ_r I_wa⁻¹ (r_a × d_r), and the
+same for b. Three impulses applied one after the other give the same
+velocities but chain every component through three multiply–subtract steps,
+one row waiting for the last; the sum takes the three rows' products side
+by side (a pile of 1,000 spheres' sweep, 1,424 contacts: 190 → 99 µs).
+
 `T` is a table with the contact rows' column layout (contact_layout.py:
 direction, lever arms and their I_w⁻¹ images, inverse masses), which the
 manifold anchors' table (manifold_friction.py) shares.
@@ -61,3 +69,24 @@ def pair_impulse(T, k, r, lam, p):
             p[6] + imb * d0, p[7] + imb * d1, p[8] + imb * d2,
             p[9] + lam * T[k, TURN_B + o], p[10] + lam * T[k, TURN_B + o + 1],
             p[11] + lam * T[k, TURN_B + o + 2])
+
+
+
+@njit(cache=True, inline="always")
+def pair_impulses(T, k, l0, l1, l2, p):
+    """The pair after impulses l0, l1, l2 along rows 0, 1, 2 of entry k at
+    once (module docstring): their sum P = Σ λ_r d_r and turns
+    Σ λ_r I_w⁻¹ (r × d_r). Written out: a helper returning each sum as a
+    tuple, inlined, made a sweep 8 % slower."""
+    ima, imb = T[k, INV_MASS_A], T[k, INV_MASS_B]
+    P0 = l0 * T[k, DIR] + l1 * T[k, DIR + 3] + l2 * T[k, DIR + 6]
+    P1 = l0 * T[k, DIR + 1] + l1 * T[k, DIR + 4] + l2 * T[k, DIR + 7]
+    P2 = l0 * T[k, DIR + 2] + l1 * T[k, DIR + 5] + l2 * T[k, DIR + 8]
+    A0 = l0 * T[k, TURN_A] + l1 * T[k, TURN_A + 3] + l2 * T[k, TURN_A + 6]
+    A1 = l0 * T[k, TURN_A + 1] + l1 * T[k, TURN_A + 4] + l2 * T[k, TURN_A + 7]
+    A2 = l0 * T[k, TURN_A + 2] + l1 * T[k, TURN_A + 5] + l2 * T[k, TURN_A + 8]
+    B0 = l0 * T[k, TURN_B] + l1 * T[k, TURN_B + 3] + l2 * T[k, TURN_B + 6]
+    B1 = l0 * T[k, TURN_B + 1] + l1 * T[k, TURN_B + 4] + l2 * T[k, TURN_B + 7]
+    B2 = l0 * T[k, TURN_B + 2] + l1 * T[k, TURN_B + 5] + l2 * T[k, TURN_B + 8]
+    return (p[0] - ima * P0, p[1] - ima * P1, p[2] - ima * P2, p[3] - A0, p[4] - A1, p[5] - A2,
+            p[6] + imb * P0, p[7] + imb * P1, p[8] + imb * P2, p[9] + B0, p[10] + B1, p[11] + B2)

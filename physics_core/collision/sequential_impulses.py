@@ -26,7 +26,7 @@ from numba import njit
 from .contact_build import row_velocity
 from .kinetic_bound import kinetic_bound
 from .manifold_friction import COUNT, FIRST, M_SLIDING, update_anchor
-from .pair_velocity import load_pair, pair_impulse, pair_velocity, store_pair
+from .pair_velocity import load_pair, pair_impulse, pair_impulses, pair_velocity, store_pair
 from .contact_layout import (BIAS, BODY_A, BODY_B, DIR, G_TN, INV_MASS_A, INV_MASS_B, LAM, MASS_N,
                              MU, SLIDING, TURN_A, TURN_B, W_TT_INV)
 
@@ -50,11 +50,10 @@ def warm_start(R, I, vel, omega):
     """Apply the impulses λ the rows start with (loaded from last substep)."""
     for c in range(len(R)):
         a, b = I[c, BODY_A], I[c, BODY_B]
-        p = load_pair(vel, omega, a, b)
-        for r in range(3):
-            if R[c, LAM + r] != 0.0:
-                p = pair_impulse(R, c, r, R[c, LAM + r], p)
-        store_pair(vel, omega, a, b, p)
+        l0, l1, l2 = R[c, LAM], R[c, LAM + 1], R[c, LAM + 2]
+        if l0 != 0.0 or l1 != 0.0 or l2 != 0.0:
+            p = pair_impulses(R, c, l0, l1, l2, load_pair(vel, omega, a, b))
+            store_pair(vel, omega, a, b, p)
 
 
 @njit(cache=True)
@@ -91,9 +90,7 @@ def update_contact(R, I, c, p):
     lt2 = old_2 - s2 - R[c, G_TN + 1] * dn
     lt1, lt2 = friction_cap(R, c, lt1, lt2, ln, I[c, SLIDING] != 0)
     R[c, LAM], R[c, LAM + 1], R[c, LAM + 2] = ln, lt1, lt2
-    p = pair_impulse(R, c, 0, dn, p)
-    p = pair_impulse(R, c, 1, lt1 - old_1, p)
-    p = pair_impulse(R, c, 2, lt2 - old_2, p)
+    p = pair_impulses(R, c, dn, lt1 - old_1, lt2 - old_2, p)
     return p, max(abs(dn), max(abs(lt1 - old_1), abs(lt2 - old_2)))
 
 
@@ -109,14 +106,11 @@ def update_normal(R, c, p):
 
 
 @njit(cache=True, inline="always")
-def manifold_update(R, I, M, MI, k, p):
-    """One update of manifold k on its pair's velocities p
-    (pair_velocity.py): a single point as one contact; two or more, their
-    normal rows, then their friction anchor (manifold_friction.py).
-    Returns (p after it, its largest impulse change; NaN if any is NaN)."""
-    first, count = MI[k, FIRST], MI[k, COUNT]
-    if count < 2:
-        return update_contact(R, I, first, p)
+def update_points(R, M, MI, k, first, count, p):
+    """One update of manifold k of two or more points (rows first..first +
+    count − 1) on its pair's velocities p: their normal rows, then their
+    friction anchor (manifold_friction.py). Returns (p after it, its
+    largest impulse change; NaN if any is NaN)."""
     change = 0.0
     for c in range(first, first + count):
         p, d = update_normal(R, c, p)
@@ -126,26 +120,27 @@ def manifold_update(R, I, M, MI, k, p):
     return p, (d if not d < change else change)
 
 
-@njit(cache=True, inline="always")
-def update_manifold(R, I, M, MI, k, vel, omega):
-    """manifold_update with its two bodies' velocities loaded once from
-    vel, omega and stored once. Returns its largest impulse change. Inlined
-    in the sweep: a call passes seven arrays, field by field, per manifold."""
-    first = MI[k, FIRST]
-    a, b = I[first, BODY_A], I[first, BODY_B]
-    p, change = manifold_update(R, I, M, MI, k, load_pair(vel, omega, a, b))
-    store_pair(vel, omega, a, b, p)
-    return change
-
-
 @njit(cache=True)
 def sweep_manifolds(R, I, M, MI, vel, omega, changes):
-    """One Gauss–Seidel sweep, manifold by manifold in key order
-    (`update_manifold`), each manifold's largest change written to
-    changes[k]. Returns the largest change."""
+    """One Gauss–Seidel sweep, manifold by manifold in key order, each on
+    its two bodies' velocities loaded once and stored once
+    (pair_velocity.py), each manifold's largest change written to
+    changes[k]. Returns the largest change.
+    A single point is updated by update_contact, two or more by
+    update_points, dispatched here: every further inlined layer the tuple
+    of velocities is returned through made the sweep slower (a pile of
+    1,000 spheres, 1,424 contacts: 230 µs a sweep through two layers, 176
+    through one, 130 with none)."""
     change = 0.0
     for k in range(len(MI)):
-        d = update_manifold(R, I, M, MI, k, vel, omega)
+        first, count = MI[k, FIRST], MI[k, COUNT]
+        a, b = I[first, BODY_A], I[first, BODY_B]
+        p = load_pair(vel, omega, a, b)
+        if count < 2:
+            p, d = update_contact(R, I, first, p)
+        else:
+            p, d = update_points(R, M, MI, k, first, count, p)
+        store_pair(vel, omega, a, b, p)
         changes[k] = d
         if not d < change:
             change = d

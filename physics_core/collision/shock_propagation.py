@@ -55,7 +55,7 @@ from .manifold_friction import COUNT, FIRST, IMA, IMB, M_LAM, TA, TB, _invert
 from .resting_block import MANIFOLDS, WS_SHAPE, settle_resting
 from .scratch import cursor, rewind, take, take_bools, take_int_rows, take_ints, take_rows
 from .pair_velocity import load_pair, store_pair
-from .sequential_impulses import manifold_update
+from .sequential_impulses import update_contact, update_points
 
 UNREACHED = np.int64(1) << 40
 # A body's sweeps have stalled when a sweep's change is above this fraction
@@ -398,10 +398,14 @@ def _point_change(p0, p, o, lever):
 def _update(R1, I1, M1, MI1, m, vel, omega, lever):
     """One update of manifold m; returns the largest change of a contact-point
     velocity of its bodies it made (m/s)."""
-    first = MI1[m, FIRST]
+    first, count = MI1[m, FIRST], MI1[m, COUNT]
     a, b = I1[first, BODY_A], I1[first, BODY_B]
     p0 = load_pair(vel, omega, a, b)
-    p, _ = manifold_update(R1, I1, M1, MI1, m, p0)
+    # dispatched here, as in sequential_impulses.sweep_manifolds
+    if count < 2:
+        p, _ = update_contact(R1, I1, first, p0)
+    else:
+        p, _ = update_points(R1, M1, MI1, m, first, count, p0)
     store_pair(vel, omega, a, b, p)
     return max(_point_change(p0, p, 0, lever), _point_change(p0, p, 6, lever))
 
