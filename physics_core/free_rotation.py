@@ -64,7 +64,7 @@ def _rows(isotropic) -> RowSplit:
 
 # ---- one body --------------------------------------------------------------------
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def diagonal_one(q, d, v, iso):
     """R diag(d) Rᵀ v for one body: the principal-axis diagonal `d` applied in
     world axes (L = I_w ω with d = I, ω = I_w⁻¹ L with d = I⁻¹). For an
@@ -76,7 +76,7 @@ def diagonal_one(q, d, v, iso):
     return rotate_one(q, (d[0] * b[0], d[1] * b[1], d[2] * b[2]))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def turn_one(q, omega, h):
     """q advanced by the exact exponential map of ω h; with ω = 0 (a body at
     rest, or asleep) q is returned as it is."""
@@ -85,7 +85,7 @@ def turn_one(q, omega, h):
     return q
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _turn_about(axis, c, s, q):
     """c q + s (q ⊗ e_i): the body turned about its own axis i. q ⊗ e_i is a
     signed permutation of q: (−x, w, z, −y), (−y, −z, w, x), (−z, y, −x, w)."""
@@ -97,7 +97,7 @@ def _turn_about(axis, c, s, q):
     return (c * w - s * z, c * x + s * y, c * y - s * x, c * z + s * w)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _kick_about(axis, c2m1, s2, L):
     """Body-frame L turned by −θ about axis i: L + (cos θ − 1) L_⊥ + sin θ (L × e_i),
     with (L × e_i)_j = L_k, (L × e_i)_k = −L_j for (i, j, k) cyclic; L_i is kept."""
@@ -109,7 +109,7 @@ def _kick_about(axis, c2m1, s2, L):
     return ((a + c2m1 * a) + s2 * b, (b + c2m1 * b) - s2 * a, c)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def split_one(q, L, inv, h):
     """The symmetric splitting over principal axes for one body: (new q, new world ω)."""
     Lb = rotate_inverse_one(q, L)                          # body-frame L
@@ -127,7 +127,7 @@ def split_one(q, L, inv, h):
     return out, rotate_one(out, (inv[0] * Lb[0], inv[1] * Lb[1], inv[2] * Lb[2]))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def advance_one(q, L, inv, h, iso):
     """(new orientation, new world ω) of one body after a torque-free rotation
     of length h; an isotropic body turns about the fixed L at ω = L / I by the

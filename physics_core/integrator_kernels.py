@@ -28,24 +28,24 @@ from .quaternion import derivative_one, normalize_one, row3, row4
 
 # ---- one body's pieces --------------------------------------------------------
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _set3(a, i, v):
     a[i, 0], a[i, 1], a[i, 2] = v
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _set4(a, i, v):
     a[i, 0], a[i, 1], a[i, 2], a[i, 3] = v
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _momentum_plus(quat, omega, inertia, iso, i, T, c):
     """L = I_w ω + c τ for body i (the torque kick of length c)."""
     L = diagonal_one(row4(quat, i), row3(inertia, i), row3(omega, i), iso[i])
     return (L[0] + T[i, 0] * c, L[1] + T[i, 1] * c, L[2] + T[i, 2] * c)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _plus(a, b, c):
     """a + c b for two 3-tuples."""
     return (a[0] + c * b[0], a[1] + c * b[1], a[2] + c * b[2])
@@ -133,38 +133,38 @@ _X, _V, _Q, _L = 0, 3, 6, 10
 WIDTH = 13
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _stage_turn(y_q, y_L, inv, iso):
     """A stage's orientation normalised, and ω = I_w⁻¹ L at it."""
     q = normalize_one(y_q)
     return q, diagonal_one(q, inv, y_L, iso)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _add_slope(total, i, j, k, first):
     """total = k₁, then total + 2 k for the next two stages."""
     total[i, j] = k if first else total[i, j] + 2.0 * k
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _ahead3(y0, i, col, c, k):
     """y0 + c k for 3 numbers from column col of body i."""
     return (y0[i, col] + c * k[0], y0[i, col + 1] + c * k[1], y0[i, col + 2] + c * k[2])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _ahead4(y0, i, col, c, k):
     return (y0[i, col] + c * k[0], y0[i, col + 1] + c * k[1], y0[i, col + 2] + c * k[2],
             y0[i, col + 3] + c * k[3])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _with_total3(total, i, col, k):
     """total + k for 3 numbers (the final k₁ + 2 k₂ + 2 k₃ + k₄)."""
     return (total[i, col] + k[0], total[i, col + 1] + k[1], total[i, col + 2] + k[2])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _with_total4(total, i, col, k):
     return (total[i, col] + k[0], total[i, col + 1] + k[1], total[i, col + 2] + k[2],
             total[i, col + 3] + k[3])

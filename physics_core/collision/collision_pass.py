@@ -39,8 +39,8 @@ from .contact_layout import BODY_A, BODY_B, MASS_N, W_TT_INV
 from .pair_velocity import load_pair, pair_impulse, pair_velocity, store_pair
 
 # columns of the pass's scratch table after impact_terms' (WHEN, SHIFT, AFTER)
-GOAL, ACC, EA, AT = AFTER + 1, AFTER + 2, AFTER + 3, AFTER + 4
-PASS_COLS = AT + 1
+GOAL, ACC, EA, AT, TESTED = AFTER + 1, AFTER + 2, AFTER + 3, AFTER + 4, AFTER + 5
+PASS_COLS = TESTED + 1
 BLOCK_SWEEPS = 100        # sweeps over one manifold's points at most (about 0.7 a sweep
                           # on four coplanar corners, from zero: 60 reach 1e-9)
 BLOCK_TOLERANCE = 1e-9    # × the manifold's total impulse: its sweeps have converged
@@ -208,34 +208,71 @@ def _bounces(R, I, c, vel, omega, terms, target, J, table):
     return goal == goal
 
 
+@njit(cache=True, inline="always")
+def _unchanged(I, c, since, table):
+    """Whether neither body of contact c changed velocity since its last
+    test (since: each body's last change; table's TESTED: when c was
+    tested, on the same clock). Its test reads nothing else that a bounce
+    of another pair changes, so it would give the same answer."""
+    tested = table[c, TESTED]
+    return since[I[c, BODY_A]] <= tested and since[I[c, BODY_B]] <= tested
+
+
+# Inlined in collision_pass: a call passes its nine arrays field by field
+# (a one-sphere step's restitution stage 0.31 -> 0.45 µs when it was called).
+@njit(cache=True, inline="always")
+def _pass_sweep(R, I, vel, omega, terms, target, tau, J, table, since, retest):
+    """One sweep of the pass, pair by pair in key order; skips a contact
+    whose bodies did not change velocity since its last test (_unchanged)
+    unless `retest`. since[-1] is the clock: the number of pairs bounced
+    so far. Returns the number of points that bounced."""
+    bounced = 0
+    c = 0
+    while c < len(R):
+        if not retest and _unchanged(I, c, since, table):
+            c += 1
+            continue
+        table[c, TESTED] = since[-1]
+        if not _bounces(R, I, c, vel, omega, terms, target, J, table):
+            c += 1
+            continue
+        first, end = _run(I, c)      # its pair's points bounce together
+        bounced += _bounce_pair(R, I, first, end, vel, omega, terms, target, tau, J, table)
+        since[-1] += 1
+        since[I[c, BODY_A]] = since[I[c, BODY_B]] = since[-1]
+        c = end
+    return bounced
+
+
 @njit(cache=True)
 def collision_pass(R, I, vel, omega, vel_start, omega_start, threshold, ramp, h, w, sweeps,
-                   target, tau, J, table):
+                   target, tau, J, table, since, retest_all=False):
     """Sweeps of bounces, pair by pair, until none bounces (at most `sweeps`).
     target[c] = C_R × approach of contact c's first bounce (0: it did not
     bounce elastically), tau[c] its impact fraction (1 when none), J (k, 3)
     the impulses applied; vel_start, omega_start: the velocities at the
-    start of the substep; table (k, PASS_COLS): scratch. Returns the number
-    of bounces."""
+    start of the substep; table (k, PASS_COLS) and since (n + 1,) int64:
+    scratch. Returns the number of bounces.
+    A sweep after the first tests again only the contacts a bounce since
+    their last test reached (a body of theirs changed velocity): the others
+    would not bounce now either. With retest_all every contact is tested
+    every sweep (the same bounces, tests/test_collision_pass_retest.py);
+    on a dense pile of 1,000 spheres, four sweeps took 373 µs that way and
+    196 µs with the skip."""
     for c in range(len(R)):
         target[c] = 0.0
         tau[c] = 1.0
         J[c, 0] = J[c, 1] = J[c, 2] = 0.0
+        # never tested: a bounce's pair skips its other points in that sweep
+        table[c, TESTED] = -1.0
     impact_terms(R, I, vel_start, omega_start, h, w, table)
+    since[:] = 0
     terms = (threshold, ramp, h)
     count = 0
     for sweep in range(sweeps):
-        bounced = 0
-        c = 0
-        while c < len(R):
-            if not _bounces(R, I, c, vel, omega, terms, target, J, table):
-                c += 1
-                continue
-            first, end = _run(I, c)      # its pair's points bounce together
-            bounced += _bounce_pair(R, I, first, end, vel, omega, terms, target, tau, J, table)
-            c = end
+        bounced = _pass_sweep(R, I, vel, omega, terms, target, tau, J, table, since,
+                              retest_all or sweep == 0)
         count += bounced
         if bounced == 0:
             break
     return count
-

