@@ -1,15 +1,17 @@
-"""One contact substep of a World rebuilt by hand up to the solve: gravity
-for one substep, detection, the rows and the collision pass, as
-contact_substep runs them (for tests of the solve's later passes)."""
+"""One contact substep of a World rebuilt by hand up to the collision pass
+or the solve: gravity for one substep, detection, the rows (and the
+collision pass), as contact_substep runs them (for tests of the pass and
+of the solve's later passes)."""
 import numpy as np
 
 from physics_core.collision import contact_stages as CS
 from physics_core.collision.scratch import new_counts
 
 
-def rows_before_solve(w, dt, g=9.81):
-    """(R, I, M, MI, vel, omega, quat, store) of w's next substep of length
-    dt, the collision pass applied: what the sweeps start from."""
+def rows_before_pass(w, dt, g=0.0):
+    """((R, I, M, MI), vel, omega, quat, store) of w's next substep of length
+    dt under gravity g (m/s², along −z): the rows before the collision pass,
+    and what the pass reads besides them."""
     cs, s = w.contact_system, w.state
     cm, fp, ip = cs.cm, cs.fp, cs.ip
     store = (np.empty(1 << 18), new_counts(), np.empty(0))
@@ -23,7 +25,14 @@ def rows_before_solve(w, dt, g=9.81):
     rows = CS.rows_stage(cm, fp, ip, contacts, pos, quat, vel, omega, w._inv_mass,
                          w.inv_inertia, cs.warm, np.full(len(pos), -1.0), dt, s.vel.copy(),
                          s.omega.copy(), store)
-    R, I, M, MI = (np.array(x) for x in rows)
-    CS.restitution_stage(fp, ip, R, I, M, MI, vel, omega, s.vel.copy(), s.omega.copy(), dt,
+    return tuple(np.array(x) for x in rows), vel, omega, quat, store
+
+
+def rows_before_solve(w, dt, g=9.81):
+    """(R, I, M, MI, vel, omega, quat, store) of w's next substep of length
+    dt, the collision pass applied: what the sweeps start from."""
+    (R, I, M, MI), vel, omega, quat, store = rows_before_pass(w, dt, g)
+    s, cs = w.state, w.contact_system
+    CS.restitution_stage(cs.fp, cs.ip, R, I, M, MI, vel, omega, s.vel.copy(), s.omega.copy(), dt,
                          store)
     return R, I, M, MI, vel, omega, quat, store

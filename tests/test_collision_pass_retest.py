@@ -14,11 +14,10 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from physics_core import load_scene
-from physics_core.collision import contact_stages as CS
 from physics_core.collision.collision_pass import PASS_COLS, collision_pass
 from physics_core.collision.contact_data import (END_WEIGHT, RESTITUTION_ITERATIONS,
                                                  RESTITUTION_RAMP, RESTITUTION_THRESHOLD)
-from physics_core.collision.scratch import new_counts
+from substep_rows import rows_before_pass
 
 pytestmark = pytest.mark.filterwarnings("ignore:.*fallback")
 DT = 1.0 / 240.0
@@ -28,20 +27,6 @@ def _scene(bodies):
     return {"dt": DT, "gravity": [0.0, 0.0, 0.0], "bodies": bodies,
             "effects": {"contacts": {"sleep": False}},
             "friction": [{"a": "default", "b": "default", "static": 0.4, "kinetic": 0.3}]}
-
-
-def _rows(w):
-    """The rows of w's next substep (no forces) before the collision pass."""
-    cs, s = w.contact_system, w.state
-    store = (np.empty(1 << 18), new_counts(), np.empty(0))
-    pos, quat, vel, omega = s.pos.copy(), s.quat.copy(), s.vel.copy(), s.omega.copy()
-    pos += vel * DT * (cs.cm.inv_mass > 0)[:, None]
-    found = CS.detect_stage(cs.cm, cs.fp, cs.ip, pos, quat, s.awake, cs.sleep, cs.cap[0], store)
-    contacts = tuple(np.array(x) for x in found[:6])
-    R, I, _, _ = (np.array(x) for x in CS.rows_stage(
-        cs.cm, cs.fp, cs.ip, contacts, pos, quat, vel, omega, w._inv_mass, w.inv_inertia,
-        cs.warm, np.full(len(pos), -1.0), DT, s.vel.copy(), s.omega.copy(), store))
-    return R, I, vel, omega
 
 
 def _pass(w, R, I, vel, omega, retest_all):
@@ -88,7 +73,7 @@ def test_retesting_only_what_a_bounce_reached_gives_the_same_bounces(seed, n):
     (this example)."""
     rng = np.random.default_rng(seed)
     w = load_scene(_scene(_cluster(rng, n)))
-    R, I, vel, omega = _rows(w)
+    (R, I, _, _), vel, omega, _, _ = rows_before_pass(w, DT)
     skipped = _pass(w, R, I, vel, omega, False)
     every = _pass(w, R, I, vel, omega, True)
     assert skipped[0] == every[0]
@@ -108,7 +93,7 @@ def test_a_row_struck_from_its_last_ball_passes_the_blow_to_the_first():
     scene = _scene(balls)
     scene["friction"] = [{"a": "default", "b": "default", "static": 0.0, "kinetic": 0.0}]
     w = load_scene(scene)
-    R, I, vel, omega = _rows(w)
+    (R, I, _, _), vel, omega, _, _ = rows_before_pass(w, DT)
     assert len(R) == 4
     skipped, every = (_pass(w, R, I, vel, omega, flag) for flag in (False, True))
     assert skipped[0] == every[0] == 4               # one bounce a sweep, down the row

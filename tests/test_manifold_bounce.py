@@ -15,6 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from physics_core import load_scene
+from substep_rows import rows_before_pass
 
 pytestmark = pytest.mark.filterwarnings("ignore:.*fallback")
 HALF = 0.1
@@ -135,23 +136,6 @@ def test_a_box_landing_any_way_never_gains_kinetic_energy(tilt, axis, spin, side
         assert _kinetic(w) <= k0 * (1 + 1e-9)
 
 
-def _rows_at_landing(w, dt):
-    """The rows of w's next substep (no gravity) before the collision pass, and
-    what the pass reads besides them."""
-    from physics_core.collision import contact_stages as CS
-    from physics_core.collision.scratch import new_counts
-    cs, s = w.contact_system, w.state
-    store = (np.empty(1 << 18), new_counts(), np.empty(0))
-    pos, quat, vel, omega = s.pos.copy(), s.quat.copy(), s.vel.copy(), s.omega.copy()
-    pos += vel * dt * (cs.cm.inv_mass > 0)[:, None]
-    found = CS.detect_stage(cs.cm, cs.fp, cs.ip, pos, quat, s.awake, cs.sleep, cs.cap[0], store)
-    contacts = tuple(np.array(x) for x in found[:6])
-    rows = CS.rows_stage(cs.cm, cs.fp, cs.ip, contacts, pos, quat, vel, omega, w._inv_mass,
-                         w.inv_inertia, cs.warm, np.full(len(pos), -1.0), dt, s.vel.copy(),
-                         s.omega.copy(), store)
-    return tuple(np.array(x) for x in rows), vel, omega, store
-
-
 def test_a_manifolds_rows_leave_their_tangent_block_to_the_bounce_that_needs_it():
     """A face's rows take their friction from the manifold's anchor, so the
     rows are built without the tangent block a single point's friction reads
@@ -168,7 +152,7 @@ def test_a_manifolds_rows_leave_their_tangent_block_to_the_bounce_that_needs_it(
                          {"name": "ball", "shape": {"type": "sphere", "radius": 0.1},
                           "mass": 1.0, "restitution": 0.5, "position": [1.0, 0.0, 0.101],
                           "velocity": [0.5, 0.0, -2.0]}, mu=0.3))
-    (R, I, M, MI), vel, omega, store = _rows_at_landing(w, dt)
+    (R, I, M, MI), vel, omega, _, store = rows_before_pass(w, dt)
     block = slice(W_TT, G_TN + 2)
     counts = MI[:, COUNT]
     assert sorted(counts) == [1, 4]
