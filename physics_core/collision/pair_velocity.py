@@ -16,7 +16,8 @@ v_a −= (Σ_r dλ_r d_r) / m_a, ω_a −= Σ_r dλ_r I_wa⁻¹ (r_a × d_r), an
 same for b. Three impulses applied one after the other give the same
 velocities but chain every component through three multiply–subtract steps,
 one row waiting for the last; the sum takes the three rows' products side
-by side (a pile of 1,000 spheres' sweep, 1,424 contacts: 190 → 99 µs).
+by side (a dense pile of 1,000 spheres, 1,424 contacts, its sweep called on
+its own: 148 → 103 µs, the same sweep loop with the one change).
 
 `T` is a table with the contact rows' column layout (contact_layout.py:
 direction, lever arms and their I_w⁻¹ images, inverse masses), which the
@@ -69,7 +70,6 @@ def pair_impulse(T, k, r, lam, p):
             p[6] + imb * d0, p[7] + imb * d1, p[8] + imb * d2,
             p[9] + lam * T[k, TURN_B + o], p[10] + lam * T[k, TURN_B + o + 1],
             p[11] + lam * T[k, TURN_B + o + 2])
-
 
 
 @njit(cache=True, inline="always")
