@@ -17,16 +17,16 @@ from physics_core import load_scene
 from physics_core.collision.collision_pass import PASS_COLS, collision_pass
 from physics_core.collision.contact_data import (END_WEIGHT, RESTITUTION_ITERATIONS,
                                                  RESTITUTION_RAMP, RESTITUTION_THRESHOLD)
+from physics_scenes import box, scene, sphere
 from substep_rows import rows_before_pass
 
 pytestmark = pytest.mark.filterwarnings("ignore:.*fallback")
 DT = 1.0 / 240.0
 
 
-def _scene(bodies):
-    return {"dt": DT, "gravity": [0.0, 0.0, 0.0], "bodies": bodies,
-            "effects": {"contacts": {"sleep": False}},
-            "friction": [{"a": "default", "b": "default", "static": 0.4, "kinetic": 0.3}]}
+def _scene(bodies, mu=(0.4, 0.3)):
+    return scene(*bodies, dt=DT, gravity=[0.0, 0.0, 0.0], effects={"contacts": {"sleep": False}},
+                 friction=[{"a": "default", "b": "default", "static": mu[0], "kinetic": mu[1]}])
 
 
 def _pass(w, R, I, vel, omega, retest_all):
@@ -52,12 +52,11 @@ def _cluster(rng, n):
         p = centre + rng.uniform(-0.25, 0.25, 3)
         p[2] = max(p[2], 0.09)
         v = (centre - p) * rng.uniform(5.0, 40.0) + rng.normal(0.0, 0.5, 3)
-        shape = ({"type": "sphere", "radius": float(rng.uniform(0.05, 0.1))} if rng.random() < 0.6
-                 else {"type": "box", "half_extents": rng.uniform(0.04, 0.09, 3).tolist()})
-        bodies.append({"name": f"b{i}", "shape": shape, "mass": float(rng.uniform(0.2, 5.0)),
-                       "restitution": float(rng.uniform(0.3, 1.0)), "position": p.tolist(),
-                       "velocity": v.tolist(),
-                       "angular_velocity": rng.normal(0.0, 3.0, 3).tolist()})
+        make, size = ((sphere, float(rng.uniform(0.05, 0.1))) if rng.random() < 0.6
+                      else (box, rng.uniform(0.04, 0.09, 3)))
+        bodies.append(make(f"b{i}", size, float(rng.uniform(0.2, 5.0)), p,
+                           restitution=float(rng.uniform(0.3, 1.0)), velocity=v.tolist(),
+                           angular_velocity=rng.normal(0.0, 3.0, 3).tolist()))
     return bodies
 
 
@@ -87,12 +86,9 @@ def test_a_row_struck_from_its_last_ball_passes_the_blow_to_the_first():
     first skip every pair the blow has not reached. The first ball leaves
     at 3 m/s and the others stop (equal masses exchange velocities)."""
     r = 0.1
-    balls = [{"name": f"b{i}", "shape": {"type": "sphere", "radius": r}, "mass": 1.0,
-              "restitution": 1.0, "position": [2.0 * r * i, 0.0, 1.0],
-              "velocity": [-3.0 if i == 4 else 0.0, 0.0, 0.0]} for i in range(5)]
-    scene = _scene(balls)
-    scene["friction"] = [{"a": "default", "b": "default", "static": 0.0, "kinetic": 0.0}]
-    w = load_scene(scene)
+    balls = [sphere(f"b{i}", r, 1.0, (2.0 * r * i, 0.0, 1.0), restitution=1.0,
+                    velocity=[-3.0 if i == 4 else 0.0, 0.0, 0.0]) for i in range(5)]
+    w = load_scene(_scene(balls, mu=(0.0, 0.0)))
     (R, I, _, _), vel, omega, _, _ = rows_before_pass(w, DT)
     assert len(R) == 4
     skipped, every = (_pass(w, R, I, vel, omega, flag) for flag in (False, True))
