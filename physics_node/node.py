@@ -85,6 +85,7 @@ class PhysicsNode(Node):
         self.paused = self.settings.paused
         self.stepper = Stepper(self.world, self.settings.command_timeout, error_types=(CommandError, ValueError))
         self.pacer = StepPacer(self.world.dt, self.settings.real_time_factor)
+        self._free_running = False  # a free-run task is queued (_free_run)
         self.window = DiagnosticsWindow(self.world, DROP_REASONS)
         self._last_warning = {}
         self.unknown_bodies = UnknownBodyTopics(self, self.model.names, self._drop)
@@ -167,15 +168,44 @@ class PhysicsNode(Node):
     def _on_tick(self):
         if self.paused or self.finished:
             return
+        if self.pacer.unlimited:
+            self._start_free_run()
+            return
         start = time.monotonic()
-        due = self.pacer.due(start)
+        self.pacer.took(self._step_within_budget(self.pacer.due(start), start))
+
+    def _step_within_budget(self, due, start):
+        """Up to `due` steps (None: as many as fit) within TICK_BUDGET_S of
+        `start`; returns how many were taken."""
         taken = 0
         while due is None or taken < due:
             self._advance()
             taken += 1
             if self.paused or self.finished or time.monotonic() - start > TICK_BUDGET_S:
                 break
-        self.pacer.took(taken)
+        return taken
+
+    # At real_time_factor 0 the node steps as fast as it can. Stepping from a
+    # timer of period 0 kept that timer always due, and rclpy's EventsExecutor
+    # then queued more and more timer events ahead of everything else: a
+    # service call waited 1.6 s after 5 s of running and 24 s after 49 s. Each
+    # budget of steps is instead a task that queues the next one behind what
+    # arrived meanwhile, so a command or call waits at most one budget. The
+    # tick timer (pacing.FREE_RUN_CHECK_S) starts the chain, and again after a
+    # pause, a reset or a change of real_time_factor ends it.
+    def _start_free_run(self):
+        executor = self.executor
+        if not self._free_running and executor is not None:
+            self._free_running = True
+            executor.create_task(self._free_run)
+
+    def _free_run(self):
+        executor = self.executor
+        if self.paused or self.finished or not self.pacer.unlimited or executor is None:
+            self._free_running = False
+            return
+        self._step_within_budget(None, time.monotonic())
+        executor.create_task(self._free_run)
 
     def _advance(self, publish_all=False):
         loop_start = time.perf_counter()
@@ -344,10 +374,14 @@ class PhysicsNode(Node):
             if p.name == "paused" and value != self.paused:
                 self.paused = value
                 self.pacer.restart(time.monotonic())
+                if not value and self.pacer.unlimited:
+                    self._start_free_run()
                 self.get_logger().info("paused" if value else "running")
             elif p.name == "real_time_factor":
                 self.pacer = StepPacer(self.world.dt, value)
                 self._tick.timer_period_ns = int(self.pacer.tick_period() * 1e9)
+                if self.pacer.unlimited and not self.paused:
+                    self._start_free_run()
             elif p.name == "command_timeout":
                 self.stepper.command_timeout = value
             elif p.name == "odometry":

@@ -4,6 +4,13 @@ import math
 
 
 MIN_TICK_S = 0.002
+# At real_time_factor 0 the node steps in a chain of executor tasks
+# (node.PhysicsNode._free_run) and the timer only starts that chain: its
+# period is how soon stepping resumes after a pause or a reset ends it. It is
+# longer than a step budget (node.TICK_BUDGET_S, 20 ms), so the timer is not
+# due again each time a budget ends (a timer always due starves rclpy's
+# EventsExecutor of everything else).
+FREE_RUN_CHECK_S = 0.05
 
 
 class StepPacer:
@@ -51,7 +58,8 @@ class StepPacer:
         MIN_TICK_S and 20 ms (command latency). Each tick costs about 0.1 ms
         of executor time whatever it runs, so at 1 kHz two steps share a
         tick: 5 % of the wall time instead of 10 %, commands wait at most
-        2 ms, and every step is still published."""
+        2 ms, and every step is still published.
+        At real_time_factor 0, FREE_RUN_CHECK_S."""
         if self.unlimited:
-            return 0.0
+            return FREE_RUN_CHECK_S
         return min(max(self.dt / self.real_time_factor, MIN_TICK_S), 0.02)
