@@ -193,19 +193,20 @@ class PhysicsNode(Node):
     # arrived meanwhile, so a command or call waits at most one budget. The
     # tick timer (pacing.FREE_RUN_CHECK_S) starts the chain, and again after a
     # pause, a reset or a change of real_time_factor ends it.
+    def _free_run_wanted(self):
+        return self.pacer.unlimited and not (self.paused or self.finished) and self.executor is not None
+
     def _start_free_run(self):
-        executor = self.executor
-        if not self._free_running and executor is not None:
+        if not self._free_running and self._free_run_wanted():
             self._free_running = True
-            executor.create_task(self._free_run)
+            self.executor.create_task(self._free_run)
 
     def _free_run(self):
-        executor = self.executor
-        if self.paused or self.finished or not self.pacer.unlimited or executor is None:
+        if not self._free_run_wanted():
             self._free_running = False
             return
         self._step_within_budget(None, time.monotonic())
-        executor.create_task(self._free_run)
+        self.executor.create_task(self._free_run)
 
     def _advance(self, publish_all=False):
         loop_start = time.perf_counter()
@@ -374,14 +375,10 @@ class PhysicsNode(Node):
             if p.name == "paused" and value != self.paused:
                 self.paused = value
                 self.pacer.restart(time.monotonic())
-                if not value and self.pacer.unlimited:
-                    self._start_free_run()
                 self.get_logger().info("paused" if value else "running")
             elif p.name == "real_time_factor":
                 self.pacer = StepPacer(self.world.dt, value)
                 self._tick.timer_period_ns = int(self.pacer.tick_period() * 1e9)
-                if self.pacer.unlimited and not self.paused:
-                    self._start_free_run()
             elif p.name == "command_timeout":
                 self.stepper.command_timeout = value
             elif p.name == "odometry":
@@ -392,6 +389,7 @@ class PhysicsNode(Node):
                     self.recording.start(pending)
                 else:
                     self.recording.stop()
+        self._start_free_run()  # unpaused, or set to run free: not waiting for the tick timer
 
     # -- diagnostics ------------------------------------------------------------
     def _on_diagnostics(self):
