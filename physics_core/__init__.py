@@ -6,11 +6,13 @@
 """
 import os
 
+from .inline_copies import share_inline_copies
 from .kernel_cache import use_source_keyed_cache
 from .refcounts import inline_reference_counts
 
 use_source_keyed_cache()      # before any kernel is defined (kernel_cache.py)
 inline_reference_counts()     # before numba's runtime is compiled (refcounts.py)
+share_inline_copies()         # a cold compile in a fraction of the time (inline_copies.py)
 
 from .contact_events import BEGIN, END, PERSIST, ContactEvents
 from .errors import CommandError, NonFiniteStateError, PhysicsError, SceneError
