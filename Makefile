@@ -26,9 +26,9 @@ export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 # The kernels' compile takes one core and the interfaces' build the other
 # (the two halves of a first install, about 6 and 4 minutes on a 2 GHz pair):
 # they run side by side, every package they need installed before either starts.
-install: $(STAMP)
-	@$(MAKE) --no-print-directory -j2 $(KERNEL_STAMP) $(IFACE_STAMP)
-	@$(MAKE) --no-print-directory $(BYTECODE_STAMP)
+install: $(STAMP) $(BYTECODE_STAMP)
+	@$(MAKE) --no-print-directory -q $(KERNEL_STAMP) $(IFACE_STAMP) || \
+		$(MAKE) --no-print-directory -j2 $(KERNEL_STAMP) $(IFACE_STAMP)
 
 $(STAMP): setup.py package.xml
 	@test -n "$(PYTHON)" || { echo "Python 3.11 or newer is required (none found on PATH)"; exit 1; }
