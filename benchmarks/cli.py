@@ -13,6 +13,8 @@
                                                     plant physics bugs one at a time; are they caught?
                                                     (hours on 2 shared cores; not part of `all`)
     physics-bench sweep     [--quick] [--out DIR]   physics-sweep on Ray: runs/s on 1, 2, all cores (not in all)
+    physics-bench compile   [--quick] [--out DIR]   every kernel compiled cold, with numba's inliner as
+                                                    physics_core sets it and as numba ships it (not in all)
 
 Each writes Markdown tables (`*.md`), plots (`*.png`) and raw data (`*.json`)
 into DIR (default benchmarks/results) and refreshes DIR/README_results.md;
@@ -70,6 +72,11 @@ def _run_crosscheck(args):
     crosscheck.run(quick=args.quick, out=args.out)
 
 
+def _run_compile(args):
+    from . import compile_time
+    compile_time.run(quick=args.quick, out=args.out)
+
+
 def _run_sweep(args):
     try:
         import ray  # noqa: F401
@@ -82,7 +89,7 @@ def _run_sweep(args):
 
 RUNNERS = {"accuracy": _run_accuracy, "stability": _run_stability,
            "scale": _run_scale, "effects": _run_effects, "node": _run_node, "hostile": _run_hostile,
-           "crosscheck": _run_crosscheck, "sweep": _run_sweep}
+           "crosscheck": _run_crosscheck, "sweep": _run_sweep, "compile": _run_compile}
 
 
 def parser():
@@ -98,11 +105,12 @@ def parser():
              "crosscheck": "closed-form contact scenes in this engine, PyBullet and MuJoCo",
              "all": "every study, then the summary",
              "hostile": "floods against a running node: what reaches it, what it counts, memory, /clock",
-             "sweep": "physics-sweep on a local Ray: runs/s on 1, 2 and all cores, overhead per run"}
+             "sweep": "physics-sweep on a local Ray: runs/s on 1, 2 and all cores, overhead per run",
+             "compile": "every kernel compiled cold: the inliner as physics_core sets it and numba's own"}
     sub.add_parser("mutations", add_help=False,
                    help="plant physics bugs one at a time and report which the tests catch "
                         "(physics-bench mutations --help)")
-    for name in STUDIES + ("all", "hostile", "sweep"):
+    for name in STUDIES + ("all", "hostile", "sweep", "compile"):
         s = sub.add_parser(name, help=helps[name])
         s.add_argument("--quick", action="store_true",
                        help="CI-sized run: fewer step sizes, shorter runs, fewer bodies")
@@ -130,9 +138,10 @@ def main(argv=None):
         args.only = None
     studies = STUDIES if args.study == "all" else (args.study,)
     start = perf_counter()
-    if args.study == "sweep":        # its figures go to the README's scaling section, not the results summary
-        RUNNERS["sweep"](args)
-        sys.stderr.write(f"wrote {os.path.join(args.out, 'sweep.md')} ({perf_counter() - start:.0f} s)\n")
+    if args.study in ("sweep", "compile"):   # their figures go to the README's own sections, not the results summary
+        RUNNERS[args.study](args)
+        sys.stderr.write(f"wrote {os.path.join(args.out, args.study + '.md')} "
+                         f"({perf_counter() - start:.0f} s)\n")
         return 0
     for name in studies:
         t0 = perf_counter()

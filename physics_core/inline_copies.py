@@ -47,6 +47,7 @@ def _with_shared_copies(inline_ir):
         finally:
             _memos.pop()
     inline_ir_shared.shares_copies = True
+    inline_ir_shared.numbas_own = inline_ir
     return inline_ir_shared
 
 
@@ -60,4 +61,16 @@ def share_inline_copies():
         return False              # a numba whose inliner is built differently
     inline_closurecall.copy = _SharedCopies
     worker.inline_ir = _with_shared_copies(inline_ir)
+    return True
+
+
+def restore_inline_copies():
+    """Numba's own inliner back, copying block by block (`physics-bench
+    compile` times both). Returns whether it had been replaced."""
+    worker = inline_closurecall.InlineWorker
+    shared = getattr(worker.inline_ir, "numbas_own", None)
+    if shared is None:
+        return False
+    worker.inline_ir = shared
+    inline_closurecall.copy = copy
     return True
