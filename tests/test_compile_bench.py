@@ -2,16 +2,12 @@
 timing of numba's compile events, its switch back to numba's own inliner,
 and its table. The study itself compiles every kernel twice (about 18
 minutes on a 2 GHz pair) and is not run here."""
-import json
-import subprocess
-import sys
 from time import perf_counter
 
 from numba import njit
 
 from benchmarks.compile_time import markdown, own_times
-
-ROOT = __file__.rsplit("/tests/", 1)[0]
+from fresh_process import printed_value
 
 
 def test_each_kernel_is_charged_its_own_compile_and_the_times_add_up_to_the_whole():
@@ -56,18 +52,14 @@ def test_the_timer_stops_listening_when_its_block_ends():
 
 
 def test_numbas_own_inliner_can_be_put_back_and_shared_copies_set_again():
-    code = ("import copy, json, physics_core\n"
+    code = ("import copy, physics_core\n"
             "from numba.core import inline_closurecall as ic\n"
             "from physics_core.inline_copies import restore_inline_copies, share_inline_copies\n"
             "shared = lambda: getattr(ic.InlineWorker.inline_ir, 'shares_copies', False)\n"
             "out = [shared(), restore_inline_copies(), shared(), ic.copy is copy,"
             " restore_inline_copies(), share_inline_copies(), shared(), ic.copy is copy]\n"
-            "print(json.dumps(out))")
-    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,
-                          text=True, timeout=300)
-    assert done.returncode == 0, done.stderr[-3000:]
-    assert json.loads(done.stdout.strip().splitlines()[-1]) == [
-        True, True, False, True, False, True, True, False]
+            "print(out)")
+    assert printed_value(code) == [True, True, False, True, False, True, True, False]
 
 
 def test_the_table_lists_the_kernels_by_their_own_compile_under_numbas_inliner():

@@ -4,12 +4,10 @@ the same as without.
 
 Each compile runs in a fresh process (the kernel is not cached), so both
 sides compile from source."""
-import json
 import os
-import subprocess
-import sys
 
-ROOT = __file__.rsplit("/tests/", 1)[0]
+from fresh_process import ROOT, printed_value
+
 # loaded on its own, not through `import physics_core`: neither side defines
 # the engine's kernels, so both number their functions alike
 _MODULE = os.path.join(ROOT, "physics_core", "inline_copies.py")
@@ -62,30 +60,23 @@ def _compile(shared):
         "m = importlib.util.module_from_spec(spec); spec.loader.exec_module(m)\n"
         "assert m.share_inline_copies()\n") if shared else ""
     code = (setup + _KERNEL +
-            "import json\n"
             "from numba.core import inline_closurecall as ic\n"
             "v = np.linspace(0.0, 3.0, 30).reshape(10, 3) ** 2\n"
             "out = np.zeros(9)\n"
             "total = kernel(v, out, 3)\n"
             "sig = kernel.signatures[0]\n"
-            "print(json.dumps({'shared': getattr(ic.InlineWorker.inline_ir, 'shares_copies', False),"
+            "print(repr({'shared': getattr(ic.InlineWorker.inline_ir, 'shares_copies', False),"
             " 'asm': kernel.inspect_asm(sig), 'total': total.hex(), 'out': [x.hex() for x in out]}))")
-    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT,
-                          capture_output=True, text=True, timeout=300)
-    assert done.returncode == 0, done.stderr[-3000:]
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    return printed_value(code)
 
 
 def test_importing_the_engine_makes_the_inliner_share_one_memo_per_copy():
-    code = ("import json, physics_core\n"
+    code = ("import physics_core\n"
             "from numba.core import inline_closurecall as ic\n"
             "from physics_core.inline_copies import share_inline_copies\n"
-            "print(json.dumps([getattr(ic.InlineWorker.inline_ir, 'shares_copies', False),"
-            " share_inline_copies()]))")
-    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,
-                          text=True, timeout=300)
-    assert done.returncode == 0, done.stderr[-3000:]
-    assert json.loads(done.stdout.strip().splitlines()[-1]) == [True, True]
+            "print([getattr(ic.InlineWorker.inline_ir, 'shares_copies', False),"
+            " share_inline_copies()])")
+    assert printed_value(code) == [True, True]
 
 
 def test_inlined_helpers_compile_to_the_same_machine_code_with_shared_copies():

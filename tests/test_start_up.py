@@ -1,18 +1,9 @@
 """What a start of the node or the engine compiles before its first step: each
 test runs a start in a fresh process that prints a list of what it compiled."""
-import ast
 import os
-import subprocess
-import sys
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-
-
-def printed_list(code, timeout, env=None):
-    """The list `code` prints last, run in a fresh Python process."""
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         timeout=timeout, check=True, env=env, cwd=ROOT).stdout
-    return ast.literal_eval(out.strip().splitlines()[-1])
+from fresh_process import ROOT
+from fresh_process import printed_value as printed_list
 
 
 # Imports what `physics-node` imports, with Python writing no bytecode, and
