@@ -24,7 +24,7 @@ export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 .PHONY: install run test bench bench-quick compare-extras clean
 
 # The kernels' compile takes one core and the interfaces' build the other
-# (the two halves of a first install, about 6 and 4 minutes on a 2 GHz pair):
+# (the two halves of a first install, about 6 and 5 minutes on a 2 GHz pair):
 # they run side by side, every package they need installed before either starts.
 install: $(STAMP) $(BYTECODE_STAMP)
 	@$(MAKE) --no-print-directory -q $(KERNEL_STAMP) $(IFACE_STAMP) || \

@@ -62,10 +62,11 @@ class own_times(event.Listener):
         self._stack.append([f"{f.__module__}.{f.__qualname__}", now])
 
     def on_end(self, ev):
-        self._charge(perf_counter())
+        now = perf_counter()
+        self._charge(now)
         self._stack.pop()
         if self._stack:
-            self._stack[-1][1] = perf_counter()
+            self._stack[-1][1] = now
 
     def __enter__(self):
         event.register("numba:compile", self)

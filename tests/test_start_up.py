@@ -2,8 +2,7 @@
 test runs a start in a fresh process that prints a list of what it compiled."""
 import os
 
-from fresh_process import ROOT
-from fresh_process import printed_value as printed_list
+from fresh_process import ROOT, printed_value
 
 
 # Imports what `physics-node` imports, with Python writing no bytecode, and
@@ -28,7 +27,7 @@ def test_every_start_compiled_the_sources_where_python_writes_no_bytecode():
     source again: about 0.25 s of a 1.9 s start to the first step. `make
     install` writes that bytecode (and again for any file changed since);
     a start then reads it and compiles none of the project's files."""
-    from_source = printed_list(_FROM_SOURCE, 300, dict(os.environ, PYTHONDONTWRITEBYTECODE="1"))
+    from_source = printed_value(_FROM_SOURCE, 300, dict(os.environ, PYTHONDONTWRITEBYTECODE="1"))
     assert from_source == [], f"compiled from source at start (run `make install`): {from_source}"
 
 
@@ -63,5 +62,5 @@ def test_typed_lists_made_in_python_compiled_their_methods_at_every_import():
     whole step after an edit of the engine), importing the engine and
     stepping that scene once compiles nothing (numba's "numba:compile"
     event fires only on a cache miss)."""
-    printed_list(_COMPILES_AT_START, 3600)
-    assert printed_list(_COMPILES_AT_START, 300) == []
+    printed_value(_COMPILES_AT_START, 3600)
+    assert printed_value(_COMPILES_AT_START, 300) == []
