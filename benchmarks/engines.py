@@ -4,7 +4,13 @@ A scene here is a plain list of bodies on a ground plane, `[(shape, size,
 position)]` with shape "box" (size = half extents) or "sphere" (size =
 radius), all of `MASS` kg, and the same step for every engine: dt, solver
 iterations, no sleeping (every body awake: the worst case, and the only one
-all three engines can be put in). `build(engine, bodies)` returns a
+all three engines can be put in). MuJoCo is run twice, with its default
+Newton solver ("mujoco") and with its conjugate-gradient one ("mujoco-cg"):
+neither is faster on every scene (Newton takes seconds a step on a pile of
+1,000 spheres, CG is several times faster on a pyramid of 1,000 boxes),
+so a comparison is made against the faster of the two. Its third, PGS, was
+slower than CG on every sphere pile, box pile and pyramid of 1 to 1,000
+bodies measured, and on the pyramid of 10,000. `build(engine, bodies)` returns a
 `step(n)` callable, a `positions()` reader and a `stages()` reader (seconds
 per named stage so far; this engine only, None for the others).
 """
@@ -13,12 +19,22 @@ import numpy as np
 MASS = 1.0
 DT = 1.0 / 240.0
 ITERATIONS = 8
-ENGINES = ("physics_core", "pybullet", "mujoco")
+ENGINES = ("physics_core", "pybullet", "mujoco", "mujoco-cg")
+PEERS = ENGINES[1:]
+LABELS = {"physics_core": "this engine", "pybullet": "PyBullet", "mujoco": "MuJoCo (Newton)",
+          "mujoco-cg": "MuJoCo (CG)"}
+_SOLVER = {"mujoco": "Newton", "mujoco-cg": "CG"}
+
+
+def module_of(engine):
+    """The Python module an engine is imported from (both MuJoCo solvers: mujoco)."""
+    return "mujoco" if engine in _SOLVER else engine
 
 
 def build(engine, bodies, dt=DT, iterations=ITERATIONS):
-    return {"physics_core": _ours, "pybullet": _pybullet, "mujoco": _mujoco}[engine](
-        bodies, dt, iterations)
+    if engine in _SOLVER:
+        return _mujoco(bodies, dt, iterations, _SOLVER[engine])
+    return {"physics_core": _ours, "pybullet": _pybullet}[engine](bodies, dt, iterations)
 
 
 def scene_of(bodies, dt=DT, iterations=ITERATIONS):
@@ -77,18 +93,23 @@ def _pybullet(bodies, dt, iterations):
     return step, positions, lambda: None
 
 
-def _mujoco(bodies, dt, iterations):
-    import mujoco
+def mujoco_xml(bodies, dt, iterations, solver):
+    """MJCF of the scene: a free body per entry over a ground plane, `solver`
+    one of MuJoCo's "Newton" (its default), "CG" or "PGS"."""
     geoms = []
-    for i, (shape, size, pos) in enumerate(bodies):
+    for shape, size, pos in bodies:
         sz = " ".join(f"{c:g}" for c in np.atleast_1d(size))
         geoms.append(f'<body pos="{pos[0]:g} {pos[1]:g} {pos[2]:g}"><freejoint/>'
                      f'<geom type="{shape}" size="{sz}" mass="{MASS:g}"/></body>')
-    xml = (f'<mujoco><option timestep="{dt:g}" iterations="{iterations}"/>'
-           '<size memory="' + f'{max(64, 2 * len(bodies))}M' + '"/>'
-           '<worldbody><geom type="plane" size="0 0 1"/>' + "".join(geoms)
-           + "</worldbody></mujoco>")
-    model = mujoco.MjModel.from_xml_string(xml)
+    return (f'<mujoco><option timestep="{dt:g}" iterations="{iterations}" solver="{solver}"/>'
+            '<size memory="' + f'{max(64, 2 * len(bodies))}M' + '"/>'
+            '<worldbody><geom type="plane" size="0 0 1"/>' + "".join(geoms)
+            + "</worldbody></mujoco>")
+
+
+def _mujoco(bodies, dt, iterations, solver):
+    import mujoco
+    model = mujoco.MjModel.from_xml_string(mujoco_xml(bodies, dt, iterations, solver))
     data = mujoco.MjData(model)
 
     def step(n):

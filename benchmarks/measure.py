@@ -17,12 +17,17 @@ import subprocess
 import sys
 from time import perf_counter
 
+import numpy as np
+
 WARMUP = 5          # steps before timing: first contacts, caches, lazy set-up; taken as
                     # WARMUP calls of one step, the calls PyBullet's and MuJoCo's step(n)
                     # make (one per step): the interpreter's first passes through an
                     # engine's step call cost tens of µs, and one call of WARMUP steps
                     # left this engine's first timed calls to pay them
 HEARTBEAT = 15.0    # s between progress lines of a long measurement
+BUDGET = 120.0      # s of stepping at most (pile_compare's budget): an engine still short of its steps then is
+                    # reported over the steps it did (an early part of the run, which
+                    # costs less than the rest once the contacts have formed)
 
 
 def _rss_mb():
@@ -40,11 +45,11 @@ def _peak_mb():
     return float("nan")
 
 
-def measure_here(scene_module, scene_function, n, engine, steps):
+def measure_here(scene_module, scene_function, n, engine, steps, budget=BUDGET):
     from . import engines
     bodies = getattr(importlib.import_module(scene_module), scene_function)(n)
     # the engine's own module is imported before the baseline, so it does not count as scene memory
-    importlib.import_module(engine)
+    importlib.import_module(engines.module_of(engine))
     base = _rss_mb()
     t0 = perf_counter()
     step, positions, stages = engines.build(engine, bodies)
@@ -55,14 +60,16 @@ def measure_here(scene_module, scene_function, n, engine, steps):
     t0 = last = perf_counter()
     chunk = max(1, steps // 20)
     best = float("inf")       # fastest chunk, per step
-    for done in range(0, steps, chunk):
+    done = 0
+    while done < steps and perf_counter() - t0 < budget:
         k = min(chunk, steps - done)
         c0 = perf_counter()
         step(k)
+        done += k
         best = min(best, (perf_counter() - c0) / k)
         if perf_counter() - last > HEARTBEAT:
             last = perf_counter()
-            sys.stderr.write(f"    {engine}, {len(bodies)} bodies: {done + chunk}/{steps} steps "
+            sys.stderr.write(f"    {engine}, {len(bodies)} bodies: {done}/{steps} steps "
                              f"({last - t0:.0f} s)\n")
             sys.stderr.flush()
     elapsed = perf_counter() - t0
@@ -70,14 +77,29 @@ def measure_here(scene_module, scene_function, n, engine, steps):
     after = stages()
     # where this engine's time goes: seconds per step in each named stage
     profile = None if after is None else {
-        k: (v - before.get(k, 0.0)) / steps for k, v in after.items() if k != "step"}
+        k: (v - before.get(k, 0.0)) / done for k, v in after.items() if k != "step"}
     peak = _peak_mb()
-    return {"engine": engine, "bodies": len(bodies), "steps": steps, "seconds": elapsed,
-            "steps_per_second": steps / elapsed, "body_steps_per_second": len(bodies) * steps / elapsed,
+    return {"engine": engine, "bodies": len(bodies), "steps": done, "steps_asked": steps,
+            "seconds": elapsed,
+            "steps_per_second": done / elapsed, "body_steps_per_second": len(bodies) * done / elapsed,
             "fastest_steps_per_second": 1.0 / best,
             "build_seconds": build, "peak_rss_mb": peak, "baseline_rss_mb": base,
             "scene_mb": max(0.0, peak - base), "min_z": float(pos[:, 2].min()) if len(pos) else 0.0,
-            "stage_seconds_per_step": profile}
+            "stage_seconds_per_step": profile, **left_by(bodies, pos)}
+
+
+def left_by(bodies, pos):
+    """What the run left, for a reader to weigh speed against: `sink_mm`, how far
+    the deepest centre is below its resting height on the ground (a box's half
+    height, a sphere's radius; 0 if none is), and `moved_mm`, the largest
+    sideways move of a centre from where it started (a pyramid that spreads
+    is collapsing)."""
+    if not len(pos):
+        return {"sink_mm": 0.0, "moved_mm": 0.0}
+    rest = np.array([np.atleast_1d(size)[-1] for _, size, _ in bodies], dtype=float)
+    start = np.array([p for _, _, p in bodies], dtype=float)
+    return {"sink_mm": 1000.0 * max(0.0, float(np.max(rest - pos[:, 2]))),
+            "moved_mm": 1000.0 * float(np.max(np.hypot(*(pos[:, :2] - start[:, :2]).T)))}
 
 
 def measure(scene_module, scene_function, n, engine, steps, timeout=1800):

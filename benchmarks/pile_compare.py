@@ -1,7 +1,7 @@
 """Sphere piles in this engine, PyBullet and MuJoCo, in one process: steps per second.
 
     python -m benchmarks.pile_compare [--sizes 100 1000 10000] [--steps 240] [--budget 120]
-                                      [--repeat 1] [--others pybullet mujoco] [--quick]
+                                      [--repeat 1] [--others pybullet mujoco mujoco-cg] [--quick]
 
 The scene: N spheres of radius 0.1 m and 1 kg on a grid of columns 0.25 m
 apart, ten layers high (fewer below 100 spheres), the lowest 5 cm above a
@@ -43,7 +43,7 @@ SPACING = 0.25
 LAYERS = 10
 JITTER = 0.01
 SEED = 0
-OTHERS = ("pybullet", "mujoco")
+OTHERS = engines.PEERS
 SKIP_FACTOR = 3.0       # an engine projected to need more than this × budget at a size is not run
 
 
@@ -58,7 +58,7 @@ def pile(n, radius=RADIUS, spacing=SPACING, layers=LAYERS, seed=SEED):
 
 
 def installed(engine):
-    return engine == "physics_core" or importlib.util.find_spec(engine) is not None
+    return engine == "physics_core" or importlib.util.find_spec(engines.module_of(engine)) is not None
 
 
 def time_engine(engine, bodies, steps, budget):
@@ -125,6 +125,9 @@ def run(sizes=SIZES, steps=None, budget=BUDGET, quick=False, log=print, others=O
                 row[f"this / {engine}"] = f"{rate['physics_core'] / rate[engine]:.2f}"
             else:
                 row[f"this / {engine}"] = "—"
+        peers = [rate[e] for e in others if e in rate]
+        row["this / fastest peer"] = (f"{rate['physics_core'] / max(peers):.2f}"
+                                      if peers and "physics_core" in rate else "—")
         rows.append(row)
     run.profiles = profiles
     return rows

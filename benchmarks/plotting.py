@@ -6,7 +6,8 @@ import matplotlib.pyplot as plt  # noqa: E402  (the backend must be chosen first
 
 COLORS = {"explicit_euler": "tab:red", "semi_implicit_euler": "tab:orange",
           "velocity_verlet": "tab:green", "rk4": "tab:blue", "adaptive": "tab:purple",
-          "physics_core": "tab:blue", "pybullet": "tab:orange", "mujoco": "tab:green"}
+          "physics_core": "tab:blue", "pybullet": "tab:orange", "mujoco": "tab:green",
+          "mujoco-cg": "tab:olive"}
 MARKERS = {"explicit_euler": "o", "semi_implicit_euler": "s", "velocity_verlet": "^", "rk4": "D",
            "adaptive": "*"}
 

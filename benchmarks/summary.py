@@ -5,6 +5,7 @@ import os
 import re
 import statistics
 
+from . import engines
 from . import markdown as md
 from .accuracy import LABELS, TARGETS, orders_table, reading_table
 from .problems import INTEGRATORS, ORDERS_EXPECTED, PROBLEMS
@@ -397,8 +398,8 @@ def _behind(data, by_size, ratio):
     for n, per in sorted(sizes.items()):
         ours = per.get("physics_core")
         cells = []
-        for other, label in (("pybullet", "PyBullet"), ("mujoco", "MuJoCo")):
-            x = ratio(ours, per.get(other))
+        for other in engines.PEERS:
+            label, x = engines.LABELS[other], ratio(ours, per.get(other))
             if x is not None:
                 cells.append(f"{label} {x:.3g}×" if x >= 1 else f"this engine {1 / x:.3g}× faster than {label}")
         if cells:
@@ -429,7 +430,7 @@ def _pile_behind(rows):
     for n, ratios in pile_ratios(rows):
         cells = [f"{label} {ratios[e]:.3g}×" if ratios[e] >= 1 else
                  f"this engine {1 / ratios[e]:.3g}× faster than {label}"
-                 for e, label in (("pybullet", "PyBullet"), ("mujoco", "MuJoCo")) if e in ratios]
+                 for e, label in ((e, engines.LABELS[e]) for e in engines.PEERS) if e in ratios]
         if cells:
             parts.append(f"{n}: " + ", ".join(cells))
     return ("\nPiles, times faster than this engine per number of spheres: " + "; ".join(parts)
