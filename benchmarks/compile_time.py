@@ -22,6 +22,7 @@ from time import perf_counter
 from numba.core import event
 
 from .progress import Progress
+from .repo import REPO
 from .results_io import machine, write_json, write_text
 
 SIDES = ("shared", "numba")     # the inliner as physics_core sets it; numba's own
@@ -79,10 +80,9 @@ class own_times(event.Listener):
 
 def cold_compile(side):
     """{"seconds", "own"} of one side, compiled into an empty cache in a fresh process."""
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     with tempfile.TemporaryDirectory(prefix="physics-bench-compile-") as cache:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache)
-        done = subprocess.run([sys.executable, "-c", _CHILD, side], cwd=root, env=env,
+        done = subprocess.run([sys.executable, "-c", _CHILD, side], cwd=REPO, env=env,
                               capture_output=True, text=True)
     if done.returncode != 0:
         raise RuntimeError(f"cold compile ({side} inliner) failed: {done.stderr[-2000:]}")

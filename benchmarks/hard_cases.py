@@ -41,7 +41,9 @@ from physics_core import NonFiniteStateError, load_scene
 from physics_core import quaternion as qt
 from physics_core.shapes import BOX, PLANE, SPHERE
 
-SCENES_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scenes")
+from .repo import REPO
+
+SCENES_DIR = os.path.join(REPO, "scenes")
 # worst depth into a plane, of the body's smallest half size, over 1, 2 and 5 s
 # (with the contact solve's shock-propagation sweep; before it: box_stack_10
 # 1.4e-3, mass_ratio_100 0.038, pyramid_10 6.5e-4)

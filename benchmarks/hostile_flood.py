@@ -27,6 +27,7 @@ import sys
 import tempfile
 import time
 
+from .repo import REPO, on_path
 from .results_io import write_json, write_text
 
 SCENE = """\
@@ -40,7 +41,6 @@ bodies:
   - {name: box, shape: {type: box, half_extents: [0.2, 0.2, 0.2]}, mass: 4.0, position: [1, 0, 0.2]}
   - {name: speck, shape: {type: sphere, radius: 0.01}, mass: 1.0e-12, position: [50, 0, 5]}
 """
-REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 class Session:
@@ -57,7 +57,7 @@ class Session:
         scene = os.path.join(workdir, "scene.yaml")
         with open(scene, "w") as f:
             f.write(SCENE)
-        env = dict(os.environ, PYTHONPATH=os.pathsep.join([REPO, os.environ.get("PYTHONPATH", "")]))
+        env = on_path(os.environ)
         self.log = open(os.path.join(workdir, f"node-{domain}.log"), "wb")
         self.proc = subprocess.Popen([sys.executable, "-m", "physics_node.main", "--scene", scene], cwd=REPO,
                                      env=env, stdout=self.log, stderr=subprocess.STDOUT, start_new_session=True)

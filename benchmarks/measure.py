@@ -19,6 +19,8 @@ from time import perf_counter
 
 import numpy as np
 
+from .repo import on_path
+
 WARMUP = 5          # steps before timing: first contacts, caches, lazy set-up; taken as
                     # WARMUP calls of one step, the calls PyBullet's and MuJoCo's step(n)
                     # make (one per step): the interpreter's first passes through an
@@ -104,8 +106,7 @@ def left_by(bodies, pos):
 
 def measure(scene_module, scene_function, n, engine, steps, timeout=1800):
     """Run one measurement in a child process; returns its dict or {"error": ...}."""
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    env = dict(os.environ, PYTHONPATH=root + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    env = on_path(os.environ)
     cmd = [sys.executable, "-m", "benchmarks.measure", scene_module, scene_function, str(n), engine,
            str(steps)]
     try:

@@ -41,9 +41,9 @@ from dataclasses import asdict
 from time import perf_counter
 
 from .mutation_list import MUTATIONS
+from .repo import REPO
 from .results_io import DEFAULT_OUT, ensure
 
-REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CAUGHT, SURVIVED = "caught", "survived"
 
 

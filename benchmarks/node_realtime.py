@@ -157,12 +157,10 @@ class Listener:
     Prints `ready` once it matches a publisher and the count when stdin closes."""
 
     def __init__(self, topic):
-        env = ros_environment()
-        root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-        env["PYTHONPATH"] = os.pathsep.join([root, env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
+        from .repo import REPO, on_path
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "benchmarks.node_realtime", "--listen", topic],
-            env=env, cwd=root, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+            env=on_path(ros_environment()), cwd=REPO, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
 
     def wait_ready(self, spin, timeout=LISTENER_READY_S):
         """Spin the node (`spin()`) until the listener has matched it."""

@@ -3,30 +3,18 @@
 
 Each check runs in a fresh process: whether the counters are inlinable is
 decided once, when numba first compiles its runtime."""
-import json
 import os
-import subprocess
-import sys
 
 import pytest
 
-ROOT = __file__.rsplit("/tests/", 1)[0]
-
-
-def _run(code, env=None):
-    full_env = dict(os.environ)
-    full_env.update(env or {})
-    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=full_env,
-                         capture_output=True, text=True, timeout=300)
-    assert out.returncode == 0, out.stderr[-3000:]
-    return json.loads(out.stdout.strip().splitlines()[-1])
+from fresh_process import printed_value
 
 
 def test_importing_the_engine_makes_the_runtime_counters_inlinable():
     """The runtime numba compiles after `import physics_core` defines
     NRT_incref and NRT_decref without the noinline attribute."""
-    got = _run(
-        "import json, physics_core\n"
+    got = printed_value(
+        "import physics_core\n"
         "from numba.core.runtime import nrt\n"
         "import numpy as np\n"
         "physics_core.load_scene(physics_core.default_scene_path()).step(1)\n"
@@ -35,7 +23,7 @@ def test_importing_the_engine_makes_the_runtime_counters_inlinable():
         "('@NRT_incref' in l or '@NRT_decref' in l)]\n"
         "groups = {l.split('=')[0].replace('attributes', '').strip(): l for l in ir.splitlines() if l.startswith('attributes #')}\n"
         "attrs = [groups.get(h.rsplit(' ', 2)[-2], '') + h for h in heads]\n"
-        "print(json.dumps({'n': len(heads), 'noinline': any('noinline' in a for a in attrs)}))")
+        "print({'n': len(heads), 'noinline': any('noinline' in a for a in attrs)})")
     assert got == {"n": 2, "noinline": False}
 
 
@@ -44,17 +32,17 @@ def test_a_runtime_compiled_before_the_engine_keeps_its_counters_and_steps_the_s
     counters stay as numba made them: inline_reference_counts says so, and
     the step still gives the same bits as with inlined counters."""
     code = (
-        "import json, hashlib{pre}\n"
+        "import hashlib{pre}\n"
         "import physics_core\n"
         "from physics_core.refcounts import inline_reference_counts\n"
         "w = physics_core.load_scene('scenes/pyramid_10.yaml')\n"
         "w.step(120)\n"
         "h = hashlib.sha1(w.state.pos.tobytes() + w.state.quat.tobytes() + w.state.vel.tobytes()"
         " + w.state.omega.tobytes()).hexdigest()\n"
-        "print(json.dumps({{'inlinable': inline_reference_counts(), 'digest': h}}))")
+        "print({{'inlinable': inline_reference_counts(), 'digest': h}})")
     early = "\nfrom numba import njit\nnjit(lambda x: x + 1)(1)"
-    inlined = _run(code.format(pre=""))
-    counted = _run(code.format(pre=early))
+    inlined = printed_value(code.format(pre=""))
+    counted = printed_value(code.format(pre=early))
     assert inlined["inlinable"] is True and counted["inlinable"] is False
     assert inlined["digest"] == counted["digest"]
 
@@ -64,8 +52,8 @@ def test_inlined_reference_counts_free_every_array_a_step_allocates(scene):
     """With NUMBA_NRT_STATS on: the arrays alive after 60 more steps are the
     arrays alive before them (a missed decref would leave one per step, a
     missed incref would free one still in use and crash or corrupt)."""
-    got = _run(
-        "import json, physics_core\n"
+    got = printed_value(
+        "import physics_core\n"
         "from numba.core.runtime import rtsys\n"
         f"w = physics_core.load_scene({scene!r})\n"
         "w.step(30)\n"
@@ -77,7 +65,7 @@ def test_inlined_reference_counts_free_every_array_a_step_allocates(scene):
         "b = live()\n"
         "w.step(60)\n"
         "c = live()\n"
-        "print(json.dumps({'a': a, 'b': b, 'c': c, 'allocs': rtsys.get_allocation_stats().alloc}))",
-        env={"NUMBA_NRT_STATS": "1"})
+        "print({'a': a, 'b': b, 'c': c, 'allocs': rtsys.get_allocation_stats().alloc})",
+        env=dict(os.environ, NUMBA_NRT_STATS="1"))
     assert got["allocs"] > 0            # the stats are on and the step allocates
     assert got["b"] == got["a"] and got["c"] == got["a"], got
