@@ -1,6 +1,7 @@
 """`README_results.md` and the README's results section, rebuilt from the JSON files
 the studies wrote, so the reading always states what the latest tables show.
 """
+import hashlib
 import os
 import re
 import statistics
@@ -14,6 +15,11 @@ from .stability_cases import isolated_verdict, long_run_verdict, passive_verdict
 
 README = os.path.join(os.path.dirname(DEFAULT_OUT), os.pardir, "README.md")
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
+# the begin marker of a section this module wrote carries its digest
+# (`<!-- results:begin sha1=… -->`): a section whose text no longer matches it
+# was edited by hand, and is never overwritten
+_REGION = re.compile(r"<!-- results:begin(?: sha1=(?P<sha>[0-9a-f]{40}))? -->\n(?P<body>.*?)"
+                     + re.escape(END), re.S)
 ORDER_SLACK = 0.3      # a measured order this far from the expected one is called out
 # What explains an order outside the expected band, where the cause is known.
 ORDER_NOTES = {
@@ -25,22 +31,43 @@ ORDER_NOTES = {
 }
 
 
-def write(out, update_readme=False):
+def write(out, update_readme=False, readme=README):
+    """README_results.md in `out`; with `update_readme`, also the results section
+    of `readme` (update_section)."""
     body = build(out, prefix="")
     written = [write_text(out, "README_results.md", "# physics-bench results\n\n" + body)]
-    if update_readme and os.path.exists(README):
-        rel = os.path.relpath(out, os.path.dirname(os.path.abspath(README)))
+    if update_readme and os.path.exists(readme):
+        rel = os.path.relpath(out, os.path.dirname(os.path.abspath(readme)))
         section = "## Results\n\n" + build(out, prefix=rel + "/", level=3)
-        with open(README, encoding="utf-8") as f:
-            text = f.read()
-        if BEGIN not in text:
-            text = text.rstrip("\n") + f"\n\n{BEGIN}\n{END}\n"
-        text = re.sub(re.escape(BEGIN) + r".*?" + re.escape(END),
-                      lambda _: f"{BEGIN}\n{section}\n{END}", text, count=1, flags=re.S)
-        with open(README, "w", encoding="utf-8") as f:
-            f.write(text)
-        written.append(os.path.abspath(README))
+        if update_section(readme, section):
+            written.append(os.path.abspath(readme))
+        else:
+            written.append(f"not {os.path.abspath(readme)}: its results section holds hand "
+                           "edits (README_results.md has the regenerated one)")
     return written
+
+
+def update_section(readme, section):
+    """Put `section` between the results markers of `readme` (appended if it has
+    none), unless the text there is not what this module last wrote: then the
+    file is left as it is. Returns whether it was written."""
+    with open(readme, encoding="utf-8") as f:
+        text = f.read()
+    found = _REGION.search(text)
+    if found and found["sha"] != _digest(found["body"]):
+        return False
+    block = f"<!-- results:begin sha1={_digest(section + chr(10))} -->\n{section}\n{END}"
+    if found:
+        text = text[:found.start()] + block + text[found.end():]
+    else:
+        text = text.rstrip("\n") + "\n\n" + block + "\n"
+    with open(readme, "w", encoding="utf-8") as f:
+        f.write(text)
+    return True
+
+
+def _digest(text):
+    return hashlib.sha1(text.encode("utf-8")).hexdigest()
 
 
 def build(out, prefix="", level=2):
@@ -376,7 +403,9 @@ def _scale(out, prefix, level):
         return f"_Skipped: contacts are not available ({data['skipped']})._\n"
     lines = [f"Details in [scale.md]({prefix}scale.md). Box pyramid, dt = 1/240 s, "
              f"{data['iterations']} solver iterations, every body awake, one process per run. "
-             "The last two columns say how many times faster than this engine the other one is.\n",
+             "The `… vs this engine` columns say how many times faster than this engine each "
+             "peer is (MuJoCo with its default Newton solver and with CG), `this / fastest "
+             "peer` this engine's steps/s over the fastest peer's.\n",
              f"![pyramid]({prefix}scale_pyramid.png)\n", pyramid_table(data["pyramid"]),
              "\n" + _behind(data, by_size, ratio) + "\n",
              "Where this engine's step time goes (share of the step per stage):\n",
