@@ -26,11 +26,11 @@ from .results_io import machine, write_json, write_text
 
 SIZES = {True: (1, 10, 100, 1000), False: (1, 10, 100, 1000, 10000)}
 BOX_PILE_SIZES = (1, 10, 100, 1000)
-# a box pile is timed over its first second, as the sphere piles are: the
-# fall, the impacts and the pile forming (its first 0.1 s is free fall)
-# the pyramid too: its first 20 steps (once its timed window at 1,000 boxes) are only
-# the 2 mm fall and the first touches, before the wall carries its weight
-BOX_PILE_STEPS = {True: 60, False: 240}
+# the box piles and the pyramid are timed over their first second, as the sphere
+# piles are: a pile's fall, impacts and forming (its first 0.1 s is free fall); the
+# pyramid's 2 mm fall, first touches and the wall taking its weight (its first 20
+# steps, once its timed window at 1,000 boxes, are only the fall and the touches)
+FIRST_SECOND_STEPS = {True: 60, False: 240}
 
 
 def run(quick=False, out=None, repeat=1):
@@ -63,12 +63,12 @@ def installed(engine):
 
 def pyramid_study(quick, repeat=1):
     return fresh_process_study("pyramid", "benchmarks.pyramid", SIZES[quick],
-                               lambda n: BOX_PILE_STEPS[quick], repeat)
+                               lambda n: FIRST_SECOND_STEPS[quick], repeat)
 
 
 def box_pile_study(quick, repeat=1):
     return fresh_process_study("box pile", "benchmarks.box_pile", BOX_PILE_SIZES,
-                               lambda n: BOX_PILE_STEPS[quick], repeat)
+                               lambda n: FIRST_SECOND_STEPS[quick], repeat)
 
 
 def fresh_process_study(label, module, sizes, steps, repeat=1):
@@ -291,7 +291,7 @@ def report(data):
     parts += ["## Box pyramid\n",
               "One vertical wall of 20 cm cubes, each row half a cube in from the one below, "
               "started 2 mm apart so that it settles under gravity. Timed over the first "
-              f"{BOX_PILE_STEPS[data['quick']]} steps (the fall, the first touches and the "
+              f"{FIRST_SECOND_STEPS[data['quick']]} steps (the fall, the first touches and the "
               "wall taking its weight), in wall time of a fresh process per engine and size; "
               f"an engine still short of its steps after {measure_budget():.0f} s of stepping "
               "is reported over the steps it did (an early part, which costs less: marked *).\n",
@@ -305,7 +305,7 @@ def report(data):
     if data.get("box_piles"):
         about = (_box_pile_doc().split("\n\n", 1) + [""])[1]
         parts += ["\n## Box piles (benchmarks/box_pile.py)\n",
-                  " ".join(about.split()) + f" Timed over the first {BOX_PILE_STEPS[data['quick']]} "
+                  " ".join(about.split()) + f" Timed over the first {FIRST_SECOND_STEPS[data['quick']]} "
                   "steps (the fall, the impacts and the pile forming), in wall time of a fresh "
                   "process per engine and size, as the pyramid is.\n",
                   "![box piles](scale_box_piles.png)\n", pyramid_table(data["box_piles"]),
