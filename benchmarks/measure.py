@@ -27,7 +27,7 @@ WARMUP = 5          # steps before timing: first contacts, caches, lazy set-up; 
                     # engine's step call cost tens of µs, and one call of WARMUP steps
                     # left this engine's first timed calls to pay them
 HEARTBEAT = 15.0    # s between progress lines of a long measurement
-BUDGET = 120.0      # s of stepping at most (pile_compare's budget): an engine still short of its steps then is
+BUDGET = 120.0      # s of stepping at most (pile_compare's too): an engine still short of its steps then is
                     # reported over the steps it did (an early part of the run, which
                     # costs less than the rest once the contacts have formed)
 

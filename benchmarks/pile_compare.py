@@ -33,11 +33,11 @@ from time import perf_counter, process_time
 import numpy as np
 
 from . import engines
+from .measure import BUDGET     # s of stepping per engine and size, at most
 
 SIZES = (100, 1000, 10000)
 STEPS = 240
 QUICK_STEPS = 60
-BUDGET = 120.0          # s of stepping per engine and size, at most
 RADIUS = 0.1
 SPACING = 0.25
 LAYERS = 10

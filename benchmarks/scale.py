@@ -20,7 +20,7 @@ from . import engines
 from . import markdown as md
 from . import plotting
 from .contact_support import available
-from .measure import measure
+from .measure import BUDGET, measure
 from .progress import Progress
 from .results_io import machine, write_json, write_text
 
@@ -225,8 +225,8 @@ def pyramid_table(rows):
                 cells += ["not installed" if r and r["error"] == "not installed" else "failed",
                           "—", "—"]
             else:
-                short = r.get("steps", 0) < r.get("steps_asked", 0)
-                cells += [md.num(r["steps_per_second"]) + (f"* ({r['steps']} steps)" if short else ""),
+                cells += [md.num(r["steps_per_second"])
+                          + (f"* ({r['steps']} steps)" if _ran_short(r) else ""),
                           md.num(r["body_steps_per_second"]), f"{r['peak_rss_mb']:.0f}"]
         ours = per.get("physics_core")
         cells += [_ratio_text(ratio(ours, per.get(e))) for e in engines.PEERS]
@@ -236,11 +236,6 @@ def pyramid_table(rows):
             cells.append(", ".join(f"{x:.2f}" for x in round_ratios(per)) or "—")
         out.append(cells)
     return md.table(head, out, align="r" * len(head))
-
-
-def measure_budget():
-    from .measure import BUDGET
-    return BUDGET
 
 
 def left_table(rows):
@@ -293,7 +288,7 @@ def report(data):
               "started 2 mm apart so that it settles under gravity. Timed over the first "
               f"{FIRST_SECOND_STEPS[data['quick']]} steps (the fall, the first touches and the "
               "wall taking its weight), in wall time of a fresh process per engine and size; "
-              f"an engine still short of its steps after {measure_budget():.0f} s of stepping "
+              f"an engine still short of its steps after {BUDGET:.0f} s of stepping "
               "is reported over the steps it did (an early part, which costs less: marked *).\n",
               "![pyramid](scale_pyramid.png)\n", pyramid_table(data["pyramid"]),
               "\nWhat each engine's run left (sunk: the deepest centre below its resting "

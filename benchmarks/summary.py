@@ -14,7 +14,7 @@ from .results_io import DEFAULT_OUT, read_json, write_text
 from .stability_cases import isolated_verdict, long_run_verdict, passive_verdict
 
 README = os.path.join(os.path.dirname(DEFAULT_OUT), os.pardir, "README.md")
-BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
+END = "<!-- results:end -->"
 # the begin marker of a section this module wrote carries its digest
 # (`<!-- results:begin sha1=… -->`): a section whose text no longer matches it
 # was edited by hand, and is never overwritten
@@ -457,9 +457,9 @@ def _pile_behind(rows):
     from .scale import pile_ratios
     parts = []
     for n, ratios in pile_ratios(rows):
-        cells = [f"{label} {ratios[e]:.3g}×" if ratios[e] >= 1 else
-                 f"this engine {1 / ratios[e]:.3g}× faster than {label}"
-                 for e, label in ((e, engines.LABELS[e]) for e in engines.PEERS) if e in ratios]
+        cells = [f"{engines.LABELS[e]} {ratios[e]:.3g}×" if ratios[e] >= 1 else
+                 f"this engine {1 / ratios[e]:.3g}× faster than {engines.LABELS[e]}"
+                 for e in engines.PEERS if e in ratios]
         if cells:
             parts.append(f"{n}: " + ", ".join(cells))
     return ("\nPiles, times faster than this engine per number of spheres: " + "; ".join(parts)
