@@ -14,9 +14,11 @@ each stage a function of contact_stages.py:
                    contact rows (contact_build.py, contact_layout.py) warm-
                    started from last substep by feature key (warm_cache.py)
     restitution  – the collision pass: bounces with C_R and friction
-                   on the bounce impulse, a manifold's points together,
-                   swept until no contact approaches faster than
-                   restitution_threshold (collision_pass.py, bounce.py)
+                   on the bounce impulse, a manifold's points together
+                   (their friction from opposite corners first:
+                   visit_order.py), swept until no contact approaches
+                   faster than restitution_threshold (collision_pass.py,
+                   bounce.py)
     solve        – sequential impulses on the normal and friction impulses,
                    contacts in key order (sequential_impulses.py): resting
                    contact and whatever the pass left

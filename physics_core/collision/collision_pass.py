@@ -37,6 +37,7 @@ from .bounce import AFTER, bounce_friction, bounce_goal, impact_terms
 from .contact_build import row_velocity, tangent_block
 from .contact_layout import BODY_A, BODY_B, MASS_N, W_TT_INV
 from .pair_velocity import load_pair, pair_impulse, pair_velocity, store_pair
+from .visit_order import farthest, visit
 
 # columns of the pass's scratch table after impact_terms' (WHEN, SHIFT, AFTER)
 GOAL, ACC, EA, AT, TESTED = AFTER + 1, AFTER + 2, AFTER + 3, AFTER + 4, AFTER + 5
@@ -138,11 +139,14 @@ def _sweeps(R, first, end, p, table, gained):
 
 @njit(cache=True, inline="always")
 def _record(R, I, first, end, vel, omega, target, tau, J, table):
-    """Friction on each point's λ, the impulses into J and the first bounce's
-    target and τ; the number of points that bounced."""
+    """Friction on each point's λ (from opposite corners first:
+    visit_order.py), the impulses into J and the first bounce's target and
+    τ; the number of points that bounced."""
     a, b = I[first, BODY_A], I[first, BODY_B]
     count = 0
-    for c in range(first, end):
+    far = farthest(R, first, end - first)
+    for j in range(end - first):
+        c = first + visit(j, far)        # opposite corners first (visit_order.py)
         jn = table[c, ACC]
         if not jn > 0.0:
             continue
