@@ -29,9 +29,10 @@ def _scene(bodies, mu=(0.4, 0.3)):
                  friction=[{"a": "default", "b": "default", "static": mu[0], "kinetic": mu[1]}])
 
 
-def _pass(w, R, I, vel, omega, retest_all):
+def _pass(w, rows, vel, omega, retest_all):
     """The pass on copies: (bounces, its outputs as bytes, the velocities)."""
     fp, ip = w.contact_system.fp, w.contact_system.ip
+    R, I, M, MI = rows
     R, v, o = R.copy(), vel.copy(), omega.copy()
     k = len(R)
     target, tau, J = np.empty(k), np.empty(k), np.empty((k, 3))
@@ -39,7 +40,7 @@ def _pass(w, R, I, vel, omega, retest_all):
                            fp[RESTITUTION_RAMP], DT, fp[END_WEIGHT],
                            ip[RESTITUTION_ITERATIONS], target, tau, J,
                            np.full((k, PASS_COLS), 1e300), np.empty(len(vel) + 1, np.int64),
-                           retest_all)
+                           (M, MI), retest_all)
     return count, b"".join(x.tobytes() for x in (v, o, target, tau, J, R)), v
 
 
@@ -72,9 +73,9 @@ def test_retesting_only_what_a_bounce_reached_gives_the_same_bounces(seed, n):
     (this example)."""
     rng = np.random.default_rng(seed)
     w = load_scene(_scene(_cluster(rng, n)))
-    (R, I, _, _), vel, omega, _, _ = rows_before_pass(w, DT)
-    skipped = _pass(w, R, I, vel, omega, False)
-    every = _pass(w, R, I, vel, omega, True)
+    rows, vel, omega, _, _ = rows_before_pass(w, DT)
+    skipped = _pass(w, rows, vel, omega, False)
+    every = _pass(w, rows, vel, omega, True)
     assert skipped[0] == every[0]
     assert skipped[1] == every[1]
 
@@ -89,9 +90,9 @@ def test_a_row_struck_from_its_last_ball_passes_the_blow_to_the_first():
     balls = [sphere(f"b{i}", r, 1.0, (2.0 * r * i, 0.0, 1.0), restitution=1.0,
                     velocity=[-3.0 if i == 4 else 0.0, 0.0, 0.0]) for i in range(5)]
     w = load_scene(_scene(balls, mu=(0.0, 0.0)))
-    (R, I, _, _), vel, omega, _, _ = rows_before_pass(w, DT)
-    assert len(R) == 4
-    skipped, every = (_pass(w, R, I, vel, omega, flag) for flag in (False, True))
+    rows, vel, omega, _, _ = rows_before_pass(w, DT)
+    assert len(rows[0]) == 4
+    skipped, every = (_pass(w, rows, vel, omega, flag) for flag in (False, True))
     assert skipped[0] == every[0] == 4               # one bounce a sweep, down the row
     assert skipped[1] == every[1]
     v = skipped[2]

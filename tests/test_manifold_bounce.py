@@ -139,10 +139,12 @@ def test_a_box_landing_any_way_never_gains_kinetic_energy(tilt, axis, spin, side
 def test_a_manifolds_rows_leave_their_tangent_block_to_the_bounce_that_needs_it():
     """A face's rows take their friction from the manifold's anchor, so the
     rows are built without the tangent block a single point's friction reads
-    (NaN there: a reader would fail the step's finite check); a point of
-    the face that bounces computes it then. A cube landing flat while
-    sliding (its points bounce with friction) must come out of the pass
-    bit for bit as from rows built with the block."""
+    (NaN there: a reader would fail the step's finite check); their bounce
+    takes its friction at the anchor too (bounce_friction.py), and a point
+    that bounces alone (collision_pass._one_by_one) computes the block
+    then. A cube landing flat while sliding (its points bounce with
+    friction) must come out of the pass bit for bit as from rows built
+    with the block."""
     from physics_core.collision import contact_stages as CS
     from physics_core.collision.contact_build import effective_masses
     from physics_core.collision.contact_layout import G_TN, MASS_N, W_TT

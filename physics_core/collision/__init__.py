@@ -15,10 +15,9 @@ each stage a function of contact_stages.py:
                    started from last substep by feature key (warm_cache.py)
     restitution  – the collision pass: bounces with C_R and friction
                    on the bounce impulse, a manifold's points together
-                   (their friction from opposite corners first:
-                   visit_order.py), swept until no contact approaches
-                   faster than restitution_threshold (collision_pass.py,
-                   bounce.py)
+                   (their friction at its anchor: bounce_friction.py),
+                   swept until no contact approaches faster than
+                   restitution_threshold (collision_pass.py, bounce.py)
     solve        – sequential impulses on the normal and friction impulses,
                    contacts in key order (sequential_impulses.py): resting
                    contact and whatever the pass left

@@ -22,7 +22,8 @@ Bounced point by point instead, the first corner of a box landing flat took
 the whole blow and the box left the floor turning: a 20 cm cube dropped
 flat on its face from 5 cm with C_R = 0.5 spun at 3.8 rad/s and slid at
 0.3 m/s, where it should rise straight at C_R × its approach speed. Friction
-then acts on each point's λ_i (bounce.bounce_friction). A single point is
+then acts on Σλ_i at the manifold's anchor (bounce_friction.py), and on a
+single point's λ (bounce.bounce_friction). A single point is
 the same problem with one row: one update solves it, and a second would
 only add rounding, so it gets exactly the pairwise impulse.
 
@@ -34,10 +35,11 @@ energy, they are undone and its points bounce one by one.
 from numba import njit
 
 from .bounce import AFTER, bounce_friction, bounce_goal, impact_terms
+from .bounce_friction import anchor_bounce_friction
 from .contact_build import row_velocity, tangent_block
 from .contact_layout import BODY_A, BODY_B, MASS_N, W_TT_INV
+from .manifold_friction import FIRST
 from .pair_velocity import load_pair, pair_impulse, pair_velocity, store_pair
-from .visit_order import farthest, visit
 
 # columns of the pass's scratch table after impact_terms' (WHEN, SHIFT, AFTER)
 GOAL, ACC, EA, AT, TESTED = AFTER + 1, AFTER + 2, AFTER + 3, AFTER + 4, AFTER + 5
@@ -58,6 +60,19 @@ def _run(I, c):
     while end < len(I) and I[end, BODY_A] == a and I[end, BODY_B] == b:
         end += 1
     return first, end
+
+
+@njit(cache=True, inline="always")
+def _manifold_of(MI, first):
+    """The manifold whose rows start at row `first` (MI's first rows ascend)."""
+    lo, hi = 0, len(MI) - 1
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if MI[mid, FIRST] < first:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
 
 
 @njit(cache=True, inline="always")
@@ -138,24 +153,28 @@ def _sweeps(R, first, end, p, table, gained):
 
 
 @njit(cache=True, inline="always")
-def _record(R, I, first, end, vel, omega, target, tau, J, table):
-    """Friction on each point's λ (from opposite corners first:
-    visit_order.py), the impulses into J and the first bounce's target and
-    τ; the number of points that bounced."""
+def _record(R, I, first, end, vel, omega, target, tau, J, table, anchors):
+    """Friction on the bounce (a single point's on its λ, bounce.py; two or
+    more points' at their manifold's anchor on their Σλ,
+    bounce_friction.py), the impulses into J and the first bounce's target
+    and τ; the number of points that bounced."""
     a, b = I[first, BODY_A], I[first, BODY_B]
+    if end - first > 1:
+        M, MI = anchors
+        anchor_bounce_friction(M, _manifold_of(MI, first), R, first, end, a, b, vel, omega,
+                               table[:, ACC], J)
     count = 0
-    far = farthest(R, first, end - first)
-    for j in range(end - first):
-        c = first + visit(j, far)        # opposite corners first (visit_order.py)
+    for c in range(first, end):
         jn = table[c, ACC]
         if not jn > 0.0:
             continue
-        if R[c, W_TT_INV] != R[c, W_TT_INV]:
-            tangent_block(R, c)          # a manifold's point (contact_build.build_rows)
-        s1, s2 = bounce_friction(R, c, a, b, jn, vel, omega)
+        if end - first == 1:
+            if R[c, W_TT_INV] != R[c, W_TT_INV]:
+                tangent_block(R, c)      # a manifold's point bounced alone (_one_by_one)
+            s1, s2 = bounce_friction(R, c, a, b, jn, vel, omega)
+            J[c, 1] += s1
+            J[c, 2] += s2
         J[c, 0] += jn
-        J[c, 1] += s1
-        J[c, 2] += s2
         if target[c] == 0.0:             # the first bounce of this contact sets its timing
             target[c] = table[c, EA]
             tau[c] = table[c, AT]
@@ -164,7 +183,7 @@ def _record(R, I, first, end, vel, omega, target, tau, J, table):
 
 
 @njit(cache=True, inline="always")
-def bounce_points(R, I, first, end, vel, omega, terms, target, tau, J, table):
+def bounce_points(R, I, first, end, vel, omega, terms, target, tau, J, table, anchors):
     """The bounce of rows first..end − 1, one body pair's points, together
     (module docstring); the number of points that bounced, or −1 when the
     sweeps would have gained energy (nothing is then changed)."""
@@ -179,25 +198,26 @@ def bounce_points(R, I, first, end, vel, omega, terms, target, tau, J, table):
     if end - first > 1 and gained > ENERGY_TOLERANCE * scale:
         return -1
     store_pair(vel, omega, a, b, p)
-    return _record(R, I, first, end, vel, omega, target, tau, J, table)
+    return _record(R, I, first, end, vel, omega, target, tau, J, table, anchors)
 
 
 @njit(cache=True, inline="always")
-def _one_by_one(R, I, first, end, vel, omega, terms, target, tau, J, table):
+def _one_by_one(R, I, first, end, vel, omega, terms, target, tau, J, table, anchors):
     """The bounces of rows first..end − 1 each alone (bounce_points on one row)."""
     got = 0
     for c in range(first, end):
-        got += bounce_points(R, I, c, c + 1, vel, omega, terms, target, tau, J, table)
+        got += bounce_points(R, I, c, c + 1, vel, omega, terms, target, tau, J, table,
+                             anchors)
     return got
 
 
 @njit(cache=True, inline="always")
-def _bounce_pair(R, I, first, end, vel, omega, terms, target, tau, J, table):
+def _bounce_pair(R, I, first, end, vel, omega, terms, target, tau, J, table, anchors):
     """One pair's bounce, its points together, or one by one if that gained energy."""
-    got = bounce_points(R, I, first, end, vel, omega, terms, target, tau, J, table)
+    got = bounce_points(R, I, first, end, vel, omega, terms, target, tau, J, table, anchors)
     if got >= 0:
         return got
-    return _one_by_one(R, I, first, end, vel, omega, terms, target, tau, J, table)
+    return _one_by_one(R, I, first, end, vel, omega, terms, target, tau, J, table, anchors)
 
 
 # Inlined in the pass's loop: most contacts do not bounce, and for them the
@@ -225,7 +245,7 @@ def _unchanged(I, c, since, table):
 # Inlined in collision_pass: a call passes its nine arrays field by field
 # (a one-sphere step's restitution stage 0.31 -> 0.45 µs when it was called).
 @njit(cache=True, inline="always")
-def _pass_sweep(R, I, vel, omega, terms, target, tau, J, table, since, retest):
+def _pass_sweep(R, I, vel, omega, terms, target, tau, J, table, since, retest, anchors):
     """One sweep of the pass, pair by pair in key order; skips a contact
     whose bodies did not change velocity since its last test (_unchanged)
     unless `retest`. since[-1] is the clock: the number of pairs bounced
@@ -241,7 +261,8 @@ def _pass_sweep(R, I, vel, omega, terms, target, tau, J, table, since, retest):
             c += 1
             continue
         first, end = _run(I, c)      # its pair's points bounce together
-        bounced += _bounce_pair(R, I, first, end, vel, omega, terms, target, tau, J, table)
+        bounced += _bounce_pair(R, I, first, end, vel, omega, terms, target, tau, J, table,
+                                anchors)
         since[-1] += 1
         since[I[c, BODY_A]] = since[I[c, BODY_B]] = since[-1]
         c = end
@@ -250,13 +271,13 @@ def _pass_sweep(R, I, vel, omega, terms, target, tau, J, table, since, retest):
 
 @njit(cache=True)
 def collision_pass(R, I, vel, omega, vel_start, omega_start, threshold, ramp, h, w, sweeps,
-                   target, tau, J, table, since, retest_all=False):
+                   target, tau, J, table, since, anchors, retest_all=False):
     """Sweeps of bounces, pair by pair, until none bounces (at most `sweeps`).
     target[c] = C_R × approach of contact c's first bounce (0: it did not
     bounce elastically), tau[c] its impact fraction (1 when none), J (k, 3)
     the impulses applied; vel_start, omega_start: the velocities at the
     start of the substep; table (k, PASS_COLS) and since (n + 1,) int64:
-    scratch. Returns the number of bounces.
+    scratch; anchors = (M, MI), the manifolds' anchors (manifold_friction.py). Returns the number of bounces.
     A sweep after the first tests again only the contacts a bounce since
     their last test reached (a body of theirs changed velocity): the others
     would not bounce now either. With retest_all every contact is tested
@@ -275,7 +296,7 @@ def collision_pass(R, I, vel, omega, vel_start, omega_start, threshold, ramp, h,
     count = 0
     for sweep in range(sweeps):
         bounced = _pass_sweep(R, I, vel, omega, terms, target, tau, J, table, since,
-                              retest_all or sweep == 0)
+                              retest_all or sweep == 0, anchors)
         count += bounced
         if bounced == 0:
             break

@@ -119,7 +119,7 @@ def normal_masses(R, c):
 def tangent_block(R, c):
     """The tangent block W_tt, its inverse and W_tt⁻¹ W_tn: what a single
     point's friction reads (sequential_impulses.update_contact, and a
-    bounce's friction, bounce.bounce_friction)."""
+    single point's bounce friction, bounce.bounce_friction)."""
     w11, w12 = coupling(R, c, 1, 1), coupling(R, c, 1, 2)
     w21, w22 = coupling(R, c, 2, 1), coupling(R, c, 2, 2)
     det = w11 * w22 - w12 * w21

@@ -139,7 +139,7 @@ def restitution_stage(fp, ip, R, I, M, MI, vel, omega, v0, w0, h, store):
     target, tau, J = take(store, k), take(store, k), take_rows(store, k, 3)
     collision_pass(R, I, vel, omega, v0, w0, fp[RESTITUTION_THRESHOLD], fp[RESTITUTION_RAMP], h,
                    fp[END_WEIGHT], ip[RESTITUTION_ITERATIONS], target, tau, J,
-                   take_rows(store, k, PASS_COLS), take_ints(store, len(vel) + 1))
+                   take_rows(store, k, PASS_COLS), take_ints(store, len(vel) + 1), (M, MI))
     if k and fp[WARM_FRACTION] > 0.0:
         warm_start(R, I, vel, omega)
         anchor_warm_start(M, MI, I, vel, omega)

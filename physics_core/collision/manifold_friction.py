@@ -222,14 +222,14 @@ def update_anchor(R, M, k, first, count, sliding, p):
     n0 = old0 - (M[k, o] * u0 + M[k, o + 1] * u1 + M[k, o + 2] * u2)
     n1 = old1 - (M[k, o + 3] * u0 + M[k, o + 4] * u1 + M[k, o + 5] * u2)
     n2 = old2 - (M[k, o + 6] * u0 + M[k, o + 7] * u1 + M[k, o + 8] * u2)
-    n0, n1, n2 = _anchor_cap(M, k, n0, n1, n2, ln, sliding)
+    n0, n1, n2 = anchor_cap(M, k, n0, n1, n2, ln, sliding)
     M[k, M_LAM], M[k, M_LAM + 1], M[k, M_LAM + 2] = n0, n1, n2
     p = pair_impulses(M, k, n0 - old0, n1 - old1, n2 - old2, p)
     return p, max(abs(n0 - old0), max(abs(n1 - old1), abs(n2 - old2)))
 
 
 @njit(cache=True, inline="always")
-def _anchor_cap(M, k, n0, n1, n2, ln, sliding):
+def anchor_cap(M, k, n0, n1, n2, ln, sliding):
     """Coulomb's bound on the anchor's impulses: tangential within μ Σλ_n,
     the twist within μ Σλ_n r̄."""
     o = W_INV

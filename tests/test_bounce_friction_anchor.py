@@ -1,0 +1,87 @@
+"""Regression: a box landing across two boxes left its plane in the collision
+pass (physics_core/collision/bounce_friction.py).
+
+Three cubes in the x–z plane, the top one landing at 2.3 m/s across the
+two below (the speed the top rows of a pyramid of 10,000 boxes land at):
+the scene is its own mirror image in y, so no body may move along y or
+turn about x or z. The pass applied each corner's friction on the bounce
+point by point in key order, two corners of one side of the face first,
+and left the bodies moving at up to 4.78 mm/s along y and turning at
+0.138 rad/s about z after one substep (1.46 mm/s and 0.027 rad/s with the
+corners taken diagonal first). At the manifold's anchor the friction acts
+on the whole face at once: 1.4e-10 m/s and 1.9e-9 rad/s. Over the first
+second the boxes stay within 0.051 mm of their plane: the solve's sweeps,
+which take a face's corners in key order too, leave them creeping along y
+at 0.3 µm/s. Checked on the pass itself (rows_before_solve:
+the rows of the impact substep, the pass applied), and over a second of
+the scene.
+"""
+import numpy as np
+import pytest
+
+from physics_core import load_scene
+from substep_rows import rows_before_solve
+
+DT = 1 / 240
+HALF = 0.1
+SPEED = 2.3
+FLOOR = {"name": "floor", "shape": {"type": "plane"}, "static": True}
+
+
+def cube(name, x, z, vz=0.0):
+    return {"name": name, "shape": {"type": "box", "half_extents": [HALF] * 3}, "mass": 1.0,
+            "position": [x, 0.0, z], "velocity": [0.0, 0.0, vz]}
+
+
+def three_boxes():
+    with pytest.warns(UserWarning, match="fallback"):
+        return load_scene({"dt": DT, "gravity": "earth",
+                           "effects": {"contacts": {"sleep": False}},
+                           "bodies": [FLOOR, cube("left", -1.01 * HALF, HALF),
+                                      cube("right", 1.01 * HALF, HALF),
+                                      cube("top", 0.0, 3 * HALF + 0.002, -SPEED)]})
+
+
+def _out_of_plane(vel, omega):
+    """The largest y velocity (m/s) and x, z turn (rad/s) of the boxes."""
+    return float(np.abs(vel[1:, 1]).max()), float(np.abs(omega[1:, [0, 2]]).max())
+
+
+def test_box_landing_across_two_boxes_left_its_plane_in_the_pass():
+    R, I, M, MI, vel, omega, quat, store = rows_before_solve(three_boxes(), DT)
+    assert np.abs(omega[1:, 1]).max() > 1.0       # the blow turns them in the plane
+    drift, turn = _out_of_plane(vel, omega)
+    # what is left is the pass's normal impulses converged to 1e-9 of their sum
+    assert drift <= 1e-8 and turn <= 1e-7
+
+
+def test_box_landing_across_two_boxes_stays_in_its_plane():
+    w = three_boxes()
+    for _ in range(240):
+        w.step()
+        assert np.abs(w.state.pos[1:, 1]).max() <= 1e-4     # m, over the first second
+
+
+@pytest.mark.parametrize("mu, vx, spin", [(0.3, 0.6, 6.0), (0.2, 0.7, 4.5)])
+def test_a_box_sliding_onto_the_floor_flat_takes_its_friction_at_the_anchor(mu, vx, spin):
+    """No gravity: a 20 cm cube of 1 kg sliding at 1 m/s lands flat at 1 m/s,
+    C_R = 0.5, so its face's bounce impulse is Σλ = 1.5 N·s. At the face's
+    centre, 0.1 m below the box's, a tangential impulse F changes the
+    slip by F W_tt, W_tt = 1/m + r²/I = 1 + 0.01 / (0.2² / 6) = 2.5: 0.4 N·s
+    stops it. Within μ Σλ (μ = 0.3: 0.45) it holds: v_x = 1 − 0.4 = 0.6 m/s
+    and ω_y = 0.4 · 0.1 / I = 6 rad/s, the face rolling on the floor. Past
+    it (μ = 0.2: 0.3) it slides: v_x = 0.7 m/s, ω_y = 4.5 rad/s, still
+    slipping forwards at 0.25 m/s. No sideways speed or other turn, and
+    the box leaves at C_R × 1 m/s."""
+    w = load_scene({"dt": DT, "gravity": [0.0, 0.0, 0.0],
+                    "effects": {"contacts": {"sleep": False}},
+                    "friction": [{"a": "default", "b": "default", "static": mu,
+                                  "kinetic": mu}],
+                    "bodies": [dict(FLOOR, restitution=0.5),
+                               {"name": "box", "shape": {"type": "box", "half_extents": [HALF] * 3},
+                                "mass": 1.0, "restitution": 0.5,
+                                "position": [0.0, 0.0, HALF + 0.002],
+                                "velocity": [1.0, 0.0, -1.0]}]})
+    R, I, M, MI, vel, omega, quat, store = rows_before_solve(w, DT, g=0.0)
+    np.testing.assert_allclose(vel[1], [vx, 0.0, 0.5], atol=1e-12)
+    np.testing.assert_allclose(omega[1], [0.0, spin, 0.0], atol=1e-10)
