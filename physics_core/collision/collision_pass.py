@@ -277,7 +277,8 @@ def collision_pass(R, I, vel, omega, vel_start, omega_start, threshold, ramp, h,
     bounce elastically), tau[c] its impact fraction (1 when none), J (k, 3)
     the impulses applied; vel_start, omega_start: the velocities at the
     start of the substep; table (k, PASS_COLS) and since (n + 1,) int64:
-    scratch; anchors = (M, MI), the manifolds' anchors (manifold_friction.py). Returns the number of bounces.
+    scratch; anchors = (M, MI), the manifolds' anchors (manifold_friction.py).
+    Returns the number of bounces.
     A sweep after the first tests again only the contacts a bounce since
     their last test reached (a body of theirs changed velocity): the others
     would not bounce now either. With retest_all every contact is tested
