@@ -44,14 +44,19 @@ def _stopping(M, k, p):
 def _share(M, k, R, first, end, lam, n0, n1, ln, J):
     """J[c, 1:3] += the part λ_c / ln of the tangential impulse n0 t1 + n1 t2
     (the anchor's tangents) in row c's own tangents."""
+    F0 = n0 * M[k, L] + n1 * M[k, L + 3]
+    F1 = n0 * M[k, L + 1] + n1 * M[k, L + 4]
+    F2 = n0 * M[k, L + 2] + n1 * M[k, L + 5]
     for c in range(first, end):
         if not lam[c] > 0.0:
             continue
         w = lam[c] / ln
         for r in (1, 2):
+            o = DIR + 3 * r
             f = 0.0
-            for i in range(3):
-                f += (n0 * M[k, L + i] + n1 * M[k, L + 3 + i]) * R[c, DIR + 3 * r + i]
+            f += F0 * R[c, o]
+            f += F1 * R[c, o + 1]
+            f += F2 * R[c, o + 2]
             J[c, r] += w * f
 
 

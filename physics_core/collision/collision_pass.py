@@ -38,7 +38,7 @@ from .bounce import AFTER, bounce_friction, bounce_goal, impact_terms
 from .bounce_friction import anchor_bounce_friction
 from .contact_build import row_velocity, tangent_block
 from .contact_layout import BODY_A, BODY_B, MASS_N, W_TT_INV
-from .manifold_friction import FIRST
+from .manifold_friction import COUNT, FIRST
 from .pair_velocity import load_pair, pair_impulse, pair_velocity, store_pair
 
 # columns of the pass's scratch table after impact_terms' (WHEN, SHIFT, AFTER)
@@ -50,28 +50,18 @@ BLOCK_TOLERANCE = 1e-9    # × the manifold's total impulse: its sweeps have con
 ENERGY_TOLERANCE = 1e-9   # × Σ λ_i |g_i|: rounding, not a gain
 
 
-@njit(cache=True)
-def _run(I, c):
-    """(first, end) of the run of rows of contact c's body pair (one manifold)."""
-    a, b = I[c, BODY_A], I[c, BODY_B]
-    first, end = c, c + 1
-    while first > 0 and I[first - 1, BODY_A] == a and I[first - 1, BODY_B] == b:
-        first -= 1
-    while end < len(I) and I[end, BODY_A] == a and I[end, BODY_B] == b:
-        end += 1
-    return first, end
-
-
 @njit(cache=True, inline="always")
-def _manifold_of(MI, first):
-    """The manifold whose rows start at row `first` (MI's first rows ascend)."""
+def _manifold_of(MI, c):
+    """The manifold holding row c: the last whose first row is c or before
+    (MI's first rows ascend; manifold_friction.manifold_ranges, one run of
+    rows of one body pair each)."""
     lo, hi = 0, len(MI) - 1
     while lo < hi:
-        mid = (lo + hi) // 2
-        if MI[mid, FIRST] < first:
-            lo = mid + 1
+        mid = (lo + hi + 1) // 2
+        if MI[mid, FIRST] <= c:
+            lo = mid
         else:
-            hi = mid
+            hi = mid - 1
     return lo
 
 
@@ -153,16 +143,15 @@ def _sweeps(R, first, end, p, table, gained):
 
 
 @njit(cache=True, inline="always")
-def _record(R, I, first, end, vel, omega, target, tau, J, table, anchors):
+def _record(R, I, first, end, vel, omega, target, tau, J, table, anchor):
     """Friction on the bounce (a single point's on its λ, bounce.py; two or
     more points' at their manifold's anchor on their Σλ,
     bounce_friction.py), the impulses into J and the first bounce's target
     and τ; the number of points that bounced."""
     a, b = I[first, BODY_A], I[first, BODY_B]
     if end - first > 1:
-        M, MI = anchors
-        anchor_bounce_friction(M, _manifold_of(MI, first), R, first, end, a, b, vel, omega,
-                               table[:, ACC], J)
+        M, k = anchor
+        anchor_bounce_friction(M, k, R, first, end, a, b, vel, omega, table[:, ACC], J)
     count = 0
     for c in range(first, end):
         jn = table[c, ACC]
@@ -183,7 +172,7 @@ def _record(R, I, first, end, vel, omega, target, tau, J, table, anchors):
 
 
 @njit(cache=True, inline="always")
-def bounce_points(R, I, first, end, vel, omega, terms, target, tau, J, table, anchors):
+def bounce_points(R, I, first, end, vel, omega, terms, target, tau, J, table, anchor):
     """The bounce of rows first..end − 1, one body pair's points, together
     (module docstring); the number of points that bounced, or −1 when the
     sweeps would have gained energy (nothing is then changed)."""
@@ -198,26 +187,26 @@ def bounce_points(R, I, first, end, vel, omega, terms, target, tau, J, table, an
     if end - first > 1 and gained > ENERGY_TOLERANCE * scale:
         return -1
     store_pair(vel, omega, a, b, p)
-    return _record(R, I, first, end, vel, omega, target, tau, J, table, anchors)
+    return _record(R, I, first, end, vel, omega, target, tau, J, table, anchor)
 
 
 @njit(cache=True, inline="always")
-def _one_by_one(R, I, first, end, vel, omega, terms, target, tau, J, table, anchors):
+def _one_by_one(R, I, first, end, vel, omega, terms, target, tau, J, table, anchor):
     """The bounces of rows first..end − 1 each alone (bounce_points on one row)."""
     got = 0
     for c in range(first, end):
         got += bounce_points(R, I, c, c + 1, vel, omega, terms, target, tau, J, table,
-                             anchors)
+                             anchor)
     return got
 
 
 @njit(cache=True, inline="always")
-def _bounce_pair(R, I, first, end, vel, omega, terms, target, tau, J, table, anchors):
+def _bounce_pair(R, I, first, end, vel, omega, terms, target, tau, J, table, anchor):
     """One pair's bounce, its points together, or one by one if that gained energy."""
-    got = bounce_points(R, I, first, end, vel, omega, terms, target, tau, J, table, anchors)
+    got = bounce_points(R, I, first, end, vel, omega, terms, target, tau, J, table, anchor)
     if got >= 0:
         return got
-    return _one_by_one(R, I, first, end, vel, omega, terms, target, tau, J, table, anchors)
+    return _one_by_one(R, I, first, end, vel, omega, terms, target, tau, J, table, anchor)
 
 
 # Inlined in the pass's loop: most contacts do not bounce, and for them the
@@ -249,7 +238,10 @@ def _pass_sweep(R, I, vel, omega, terms, target, tau, J, table, since, retest, a
     """One sweep of the pass, pair by pair in key order; skips a contact
     whose bodies did not change velocity since its last test (_unchanged)
     unless `retest`. since[-1] is the clock: the number of pairs bounced
-    so far. Returns the number of points that bounced."""
+    so far; anchors = (M, MI) (manifold_friction.py): a bouncing contact's
+    manifold gives its pair's rows and its anchor. Returns the number of
+    points that bounced."""
+    M, MI = anchors
     bounced = 0
     c = 0
     while c < len(R):
@@ -260,9 +252,10 @@ def _pass_sweep(R, I, vel, omega, terms, target, tau, J, table, since, retest, a
         if not _bounces(R, I, c, vel, omega, terms, target, J, table):
             c += 1
             continue
-        first, end = _run(I, c)      # its pair's points bounce together
+        k = _manifold_of(MI, c)      # its pair's points bounce together
+        first, end = MI[k, FIRST], MI[k, FIRST] + MI[k, COUNT]
         bounced += _bounce_pair(R, I, first, end, vel, omega, terms, target, tau, J, table,
-                                anchors)
+                                (M, k))
         since[-1] += 1
         since[I[c, BODY_A]] = since[I[c, BODY_B]] = since[-1]
         c = end
