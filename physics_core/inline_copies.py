@@ -68,9 +68,9 @@ def restore_inline_copies():
     """Numba's own inliner back, copying block by block (`physics-bench
     compile` times both). Returns whether it had been replaced."""
     worker = inline_closurecall.InlineWorker
-    shared = getattr(worker.inline_ir, "numbas_own", None)
-    if shared is None:
+    own = getattr(worker.inline_ir, "numbas_own", None)
+    if own is None:
         return False
-    worker.inline_ir = shared
+    worker.inline_ir = own
     inline_closurecall.copy = copy
     return True

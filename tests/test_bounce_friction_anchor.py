@@ -20,7 +20,8 @@ import numpy as np
 import pytest
 
 from physics_core import load_scene
-from substep_rows import rows_before_solve
+from physics_core.collision import contact_stages as CS
+from substep_rows import rows_before_pass, rows_before_solve
 
 DT = 1 / 240
 HALF = 0.1
@@ -85,3 +86,70 @@ def test_a_box_sliding_onto_the_floor_flat_takes_its_friction_at_the_anchor(mu, 
     R, I, M, MI, vel, omega, quat, store = rows_before_solve(w, DT, g=0.0)
     np.testing.assert_allclose(vel[1], [vx, 0.0, 0.5], atol=1e-12)
     np.testing.assert_allclose(omega[1], [0.0, spin, 0.0], atol=1e-10)
+
+
+def _landing_box(mu_s, mu_k, velocity, omega):
+    """No gravity: a 20 cm cube of 1 kg landing flat on the floor, C_R = 0.5."""
+    return load_scene({"dt": DT, "gravity": [0.0, 0.0, 0.0],
+                       "effects": {"contacts": {"sleep": False}},
+                       "friction": [{"a": "default", "b": "default", "static": mu_s,
+                                     "kinetic": mu_k}],
+                       "bodies": [dict(FLOOR, restitution=0.5),
+                                  {"name": "box", "shape": {"type": "box",
+                                                            "half_extents": [HALF] * 3},
+                                   "mass": 1.0, "restitution": 0.5,
+                                   "position": [0.0, 0.0, HALF + 0.002],
+                                   "velocity": velocity, "angular_velocity": omega}]})
+
+
+@pytest.mark.parametrize("mu_s, mu_k, vx, spin", [(0.3, 0.2, 0.6, 6.0), (0.25, 0.2, 0.7, 4.5)])
+def test_a_box_landing_flat_holds_by_static_friction_and_slides_by_kinetic(mu_s, mu_k, vx, spin):
+    """The case above with μ_s ≠ μ_k: stopping the slip takes 0.4 N·s of
+    Σλ = 1.5 N·s. μ_s = 0.3 allows 0.45: it holds (v_x = 0.6 m/s, ω_y = 6
+    rad/s), though μ_k Σλ = 0.3 could not stop it. μ_s = 0.25 allows 0.375:
+    it slides and takes μ_k Σλ = 0.3 N·s (v_x = 0.7 m/s, ω_y = 4.5 rad/s),
+    not the 0.375 of μ_s."""
+    w = _landing_box(mu_s, mu_k, [1.0, 0.0, -1.0], [0.0, 0.0, 0.0])
+    R, I, M, MI, vel, omega, quat, store = rows_before_solve(w, DT, g=0.0)
+    np.testing.assert_allclose(vel[1], [vx, 0.0, 0.5], atol=1e-12)
+    np.testing.assert_allclose(omega[1], [0.0, spin, 0.0], atol=1e-10)
+
+
+@pytest.mark.parametrize("mu, spin", [(0.3, 0.0), (0.1, 5.0 - 0.1 * 1.5 * HALF * np.sqrt(2) * 150)])
+def test_a_box_landing_flat_while_spinning_takes_the_twist_at_its_anchor(mu, spin):
+    """A cube landing flat at 1 m/s while spinning at 5 rad/s about the
+    vertical: its four corners bounce alike, Σλ = 1.5 N·s, and at the
+    face's centre the friction has no slip to stop, only the twist: the
+    impulse I_z ω_z = (0.2² + 0.2²)/12 × 5 = 0.0333 N·m·s stops it, within
+    μ Σλ r̄ (r̄ = 0.1 √2 m, the corners' distance from the centre): 0.0636
+    with μ = 0.3, so the spin stops; 0.0212 with μ = 0.1, which takes
+    0.0212 / I_z = 3.18 rad/s off it. No slip, no tilt."""
+    w = _landing_box(mu, mu, [0.0, 0.0, -1.0], [0.0, 0.0, 5.0])
+    R, I, M, MI, vel, omega, quat, store = rows_before_solve(w, DT, g=0.0)
+    np.testing.assert_allclose(vel[1], [0.0, 0.0, 0.5], atol=1e-12)
+    np.testing.assert_allclose(omega[1], [0.0, 0.0, spin], atol=1e-10)
+
+
+def test_bounce_friction_is_shared_by_the_points_in_proportion_to_their_impulses():
+    """A cube landing flat while turning about y (ω_y = 2 rad/s: its −x corners
+    approach at 1.2 m/s, its +x corners at 0.8) and sliding along x: the
+    corners bounce with different λ. The events' friction per point (the
+    pass's J, in each point's tangents) is the anchor's impulse shared in
+    proportion to each point's λ, and the shares add up to the box's
+    change of momentum along the floor."""
+    w = _landing_box(0.3, 0.3, [1.0, 0.0, -1.0], [0.0, 2.0, 0.0])
+    (R, I, M, MI), vel, omega, quat, store = rows_before_pass(w, DT, g=0.0)
+    v_before = vel[1].copy()
+    s, cs = w.state, w.contact_system
+    _, _, J = CS.restitution_stage(cs.fp, cs.ip, R, I, M, MI, vel, omega, s.vel.copy(),
+                                   s.omega.copy(), DT, store)
+    J = np.array(J)
+    lam = J[:, 0]
+    assert len(lam) == 4 and lam.min() > 0.0 and lam.max() > 1.2 * lam.min()
+    # each point's tangential share as a world vector
+    share = J[:, 1:2] * R[:, 3:6] + J[:, 2:3] * R[:, 6:9]
+    per_lambda = share / lam[:, None]
+    np.testing.assert_allclose(per_lambda, np.broadcast_to(per_lambda[0], (4, 3)), atol=1e-12)
+    tangential = (vel[1] - v_before) * 1.0            # m = 1 kg, the floor static
+    np.testing.assert_allclose(share.sum(axis=0)[:2], tangential[:2], atol=1e-12)
+    assert abs(share.sum(axis=0)[2]) <= 1e-12

@@ -26,18 +26,8 @@ has no part there.
 from numba import njit
 
 from .contact_layout import DIR
-from .manifold_friction import L, M_MU_S, W_INV, anchor_cap
-from .pair_velocity import load_pair, pair_impulses, pair_velocity, store_pair
-
-
-@njit(cache=True, inline="always")
-def _stopping(M, k, p):
-    """−W⁻¹ u: the anchor's impulses (t1, t2, twist) that stop its slip and twist."""
-    u0, u1, u2 = pair_velocity(M, k, 0, p), pair_velocity(M, k, 1, p), pair_velocity(M, k, 2, p)
-    o = W_INV
-    return (-(M[k, o] * u0 + M[k, o + 1] * u1 + M[k, o + 2] * u2),
-            -(M[k, o + 3] * u0 + M[k, o + 4] * u1 + M[k, o + 5] * u2),
-            -(M[k, o + 6] * u0 + M[k, o + 7] * u1 + M[k, o + 8] * u2))
+from .manifold_friction import L, M_MU_S, anchor_cap, anchor_stopping
+from .pair_velocity import load_pair, pair_impulses, store_pair
 
 
 @njit(cache=True, inline="always")
@@ -72,7 +62,8 @@ def anchor_bounce_friction(M, k, R, first, end, a, b, vel, omega, lam, J):
     if not ln > 0.0:
         return
     p = load_pair(vel, omega, a, b)
-    n0, n1, n2 = _stopping(M, k, p)
+    s0, s1, s2 = anchor_stopping(M, k, p)
+    n0, n1, n2 = -s0, -s1, -s2
     grip = M[k, M_MU_S] * ln
     n0, n1, n2 = anchor_cap(M, k, n0, n1, n2, ln, not n0 * n0 + n1 * n1 <= grip * grip)
     store_pair(vel, omega, a, b, pair_impulses(M, k, n0, n1, n2, p))

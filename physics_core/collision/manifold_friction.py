@@ -206,6 +206,18 @@ def anchor_warm_start(M, MI, I, vel, omega):
 
 
 @njit(cache=True, inline="always")
+def anchor_stopping(M, k, p):
+    """W⁻¹ u at manifold k's anchor on its pair's velocities p, u = (u_t1,
+    u_t2, ω_n) its slip and twist: −W⁻¹ u are the impulses (t1, t2, twist)
+    that stop them (the solve's update_anchor, the bounce's friction)."""
+    u0, u1, u2 = pair_velocity(M, k, 0, p), pair_velocity(M, k, 1, p), pair_velocity(M, k, 2, p)
+    o = W_INV
+    return ((M[k, o] * u0 + M[k, o + 1] * u1 + M[k, o + 2] * u2),
+            (M[k, o + 3] * u0 + M[k, o + 4] * u1 + M[k, o + 5] * u2),
+            (M[k, o + 6] * u0 + M[k, o + 7] * u1 + M[k, o + 8] * u2))
+
+
+@njit(cache=True, inline="always")
 def update_anchor(R, M, k, first, count, sliding, p):
     """One update of manifold k's anchor (rows first..first + count − 1) on
     its pair's velocities p (pair_velocity.py: the anchor table shares the
@@ -214,14 +226,9 @@ def update_anchor(R, M, k, first, count, sliding, p):
     ln = 0.0
     for c in range(first, first + count):
         ln += R[c, LAM]
-    u0 = pair_velocity(M, k, 0, p)
-    u1 = pair_velocity(M, k, 1, p)
-    u2 = pair_velocity(M, k, 2, p)
+    s0, s1, s2 = anchor_stopping(M, k, p)
     old0, old1, old2 = M[k, M_LAM], M[k, M_LAM + 1], M[k, M_LAM + 2]
-    o = W_INV
-    n0 = old0 - (M[k, o] * u0 + M[k, o + 1] * u1 + M[k, o + 2] * u2)
-    n1 = old1 - (M[k, o + 3] * u0 + M[k, o + 4] * u1 + M[k, o + 5] * u2)
-    n2 = old2 - (M[k, o + 6] * u0 + M[k, o + 7] * u1 + M[k, o + 8] * u2)
+    n0, n1, n2 = old0 - s0, old1 - s1, old2 - s2
     n0, n1, n2 = anchor_cap(M, k, n0, n1, n2, ln, sliding)
     M[k, M_LAM], M[k, M_LAM + 1], M[k, M_LAM + 2] = n0, n1, n2
     p = pair_impulses(M, k, n0 - old0, n1 - old1, n2 - old2, p)
