@@ -28,11 +28,20 @@ def rows_before_pass(w, dt, g=0.0):
     return tuple(np.array(x) for x in rows), vel, omega, quat, store
 
 
+def pass_applied(w, dt, g=9.81):
+    """((R, I, M, MI), vel, omega, quat, store, (target, tau, J)) of w's next
+    substep of length dt: the rows and velocities after the collision pass
+    (and the warm start), and the pass's bounce targets, times of impact
+    and impulses J (k, 3: normal, t1, t2)."""
+    (R, I, M, MI), vel, omega, quat, store = rows_before_pass(w, dt, g)
+    s, cs = w.state, w.contact_system
+    made = CS.restitution_stage(cs.fp, cs.ip, R, I, M, MI, vel, omega, s.vel.copy(),
+                                s.omega.copy(), dt, store)
+    return (R, I, M, MI), vel, omega, quat, store, tuple(np.array(x) for x in made)
+
+
 def rows_before_solve(w, dt, g=9.81):
     """(R, I, M, MI, vel, omega, quat, store) of w's next substep of length
     dt, the collision pass applied: what the sweeps start from."""
-    (R, I, M, MI), vel, omega, quat, store = rows_before_pass(w, dt, g)
-    s, cs = w.state, w.contact_system
-    CS.restitution_stage(cs.fp, cs.ip, R, I, M, MI, vel, omega, s.vel.copy(), s.omega.copy(), dt,
-                         store)
+    (R, I, M, MI), vel, omega, quat, store, _ = pass_applied(w, dt, g)
     return R, I, M, MI, vel, omega, quat, store

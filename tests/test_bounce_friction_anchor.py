@@ -20,8 +20,7 @@ import numpy as np
 import pytest
 
 from physics_core import load_scene
-from physics_core.collision import contact_stages as CS
-from substep_rows import rows_before_pass, rows_before_solve
+from substep_rows import pass_applied, rows_before_solve
 
 DT = 1 / 240
 HALF = 0.1
@@ -63,31 +62,6 @@ def test_box_landing_across_two_boxes_stays_in_its_plane():
         assert np.abs(w.state.pos[1:, 1]).max() <= 1e-4     # m, over the first second
 
 
-@pytest.mark.parametrize("mu, vx, spin", [(0.3, 0.6, 6.0), (0.2, 0.7, 4.5)])
-def test_a_box_sliding_onto_the_floor_flat_takes_its_friction_at_the_anchor(mu, vx, spin):
-    """No gravity: a 20 cm cube of 1 kg sliding at 1 m/s lands flat at 1 m/s,
-    C_R = 0.5, so its face's bounce impulse is Σλ = 1.5 N·s. At the face's
-    centre, 0.1 m below the box's, a tangential impulse F changes the
-    slip by F W_tt, W_tt = 1/m + r²/I = 1 + 0.01 / (0.2² / 6) = 2.5: 0.4 N·s
-    stops it. Within μ Σλ (μ = 0.3: 0.45) it holds: v_x = 1 − 0.4 = 0.6 m/s
-    and ω_y = 0.4 · 0.1 / I = 6 rad/s, the face rolling on the floor. Past
-    it (μ = 0.2: 0.3) it slides: v_x = 0.7 m/s, ω_y = 4.5 rad/s, still
-    slipping forwards at 0.25 m/s. No sideways speed or other turn, and
-    the box leaves at C_R × 1 m/s."""
-    w = load_scene({"dt": DT, "gravity": [0.0, 0.0, 0.0],
-                    "effects": {"contacts": {"sleep": False}},
-                    "friction": [{"a": "default", "b": "default", "static": mu,
-                                  "kinetic": mu}],
-                    "bodies": [dict(FLOOR, restitution=0.5),
-                               {"name": "box", "shape": {"type": "box", "half_extents": [HALF] * 3},
-                                "mass": 1.0, "restitution": 0.5,
-                                "position": [0.0, 0.0, HALF + 0.002],
-                                "velocity": [1.0, 0.0, -1.0]}]})
-    R, I, M, MI, vel, omega, quat, store = rows_before_solve(w, DT, g=0.0)
-    np.testing.assert_allclose(vel[1], [vx, 0.0, 0.5], atol=1e-12)
-    np.testing.assert_allclose(omega[1], [0.0, spin, 0.0], atol=1e-10)
-
-
 def _landing_box(mu_s, mu_k, velocity, omega):
     """No gravity: a 20 cm cube of 1 kg landing flat on the floor, C_R = 0.5."""
     return load_scene({"dt": DT, "gravity": [0.0, 0.0, 0.0],
@@ -100,6 +74,23 @@ def _landing_box(mu_s, mu_k, velocity, omega):
                                    "mass": 1.0, "restitution": 0.5,
                                    "position": [0.0, 0.0, HALF + 0.002],
                                    "velocity": velocity, "angular_velocity": omega}]})
+
+
+@pytest.mark.parametrize("mu, vx, spin", [(0.3, 0.6, 6.0), (0.2, 0.7, 4.5)])
+def test_a_box_sliding_onto_the_floor_flat_takes_its_friction_at_the_anchor(mu, vx, spin):
+    """No gravity: a 20 cm cube of 1 kg sliding at 1 m/s lands flat at 1 m/s,
+    C_R = 0.5, so its face's bounce impulse is Σλ = 1.5 N·s. At the face's
+    centre, 0.1 m below the box's, a tangential impulse F changes the
+    slip by F W_tt, W_tt = 1/m + r²/I = 1 + 0.01 / (0.2² / 6) = 2.5: 0.4 N·s
+    stops it. Within μ Σλ (μ = 0.3: 0.45) it holds: v_x = 1 − 0.4 = 0.6 m/s
+    and ω_y = 0.4 · 0.1 / I = 6 rad/s, the face rolling on the floor. Past
+    it (μ = 0.2: 0.3) it slides: v_x = 0.7 m/s, ω_y = 4.5 rad/s, still
+    slipping forwards at 0.25 m/s. No sideways speed or other turn, and
+    the box leaves at C_R × 1 m/s."""
+    w = _landing_box(mu, mu, [1.0, 0.0, -1.0], [0.0, 0.0, 0.0])
+    R, I, M, MI, vel, omega, quat, store = rows_before_solve(w, DT, g=0.0)
+    np.testing.assert_allclose(vel[1], [vx, 0.0, 0.5], atol=1e-12)
+    np.testing.assert_allclose(omega[1], [0.0, spin, 0.0], atol=1e-10)
 
 
 @pytest.mark.parametrize("mu_s, mu_k, vx, spin", [(0.3, 0.2, 0.6, 6.0), (0.25, 0.2, 0.7, 4.5)])
@@ -131,19 +122,15 @@ def test_a_box_landing_flat_while_spinning_takes_the_twist_at_its_anchor(mu, spi
 
 
 def test_bounce_friction_is_shared_by_the_points_in_proportion_to_their_impulses():
-    """A cube landing flat while turning about y (ω_y = 2 rad/s: its −x corners
-    approach at 1.2 m/s, its +x corners at 0.8) and sliding along x: the
+    """A cube landing flat while turning about y (ω_y = 2 rad/s: its +x corners
+    approach at 1.2 m/s, its −x corners at 0.8) and sliding along x: the
     corners bounce with different λ. The events' friction per point (the
     pass's J, in each point's tangents) is the anchor's impulse shared in
     proportion to each point's λ, and the shares add up to the box's
     change of momentum along the floor."""
     w = _landing_box(0.3, 0.3, [1.0, 0.0, -1.0], [0.0, 2.0, 0.0])
-    (R, I, M, MI), vel, omega, quat, store = rows_before_pass(w, DT, g=0.0)
-    v_before = vel[1].copy()
-    s, cs = w.state, w.contact_system
-    _, _, J = CS.restitution_stage(cs.fp, cs.ip, R, I, M, MI, vel, omega, s.vel.copy(),
-                                   s.omega.copy(), DT, store)
-    J = np.array(J)
+    v_before = w.state.vel[1].copy()
+    (R, I, M, MI), vel, omega, quat, store, (_, _, J) = pass_applied(w, DT, g=0.0)
     lam = J[:, 0]
     assert len(lam) == 4 and lam.min() > 0.0 and lam.max() > 1.2 * lam.min()
     # each point's tangential share as a world vector
