@@ -107,10 +107,14 @@ def test_shock_propagation_leaves_free_flying_bodies_untouched(seed):
 
 def test_shock_propagation_off_lets_the_mass_ratio_sink():
     """The switch works: without the sweep, 8 sweeps cannot hold the heavy
-    cube (this is the failure the sweep removes)."""
+    cube within the bound the sweep holds it to (test above), at any of
+    the first five seconds (measured: 25.7 mm at 1 s, then 14.8, 14.3, 13.0
+    and 11.2 as the position pass pushes it out; more than 50 mm before the
+    sweeps moved a face's points together, sequential_impulses.even_share)."""
     w = world([box("light", 0.1), box("heavy", 0.3, mass=1000.0)], shock_propagation=False)
-    w.step(240 * 5)
-    assert 0.3 - w.state.pos[2, 2] > 0.05
+    for _ in range(5):
+        w.step(240)
+        assert 0.3 - w.state.pos[2, 2] > SLOP + 0.002
 
 
 def test_pyramid_of_300_boxes_keeps_its_top_box_instead_of_throwing_it():

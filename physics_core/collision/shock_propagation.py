@@ -395,9 +395,11 @@ def _point_change(p0, p, o, lever):
 
 
 @njit(cache=True, inline="always")
-def _update(R1, I1, M1, MI1, m, vel, omega, lever):
-    """One update of manifold m; returns the largest change of a contact-point
-    velocity of its bodies it made (m/s)."""
+def _update(R1, I1, M1, MI1, m, vel, omega, lever, shares, first_pass):
+    """One update of manifold m (a face's points first moved together,
+    sequential_impulses.update_points, their shares computed on the first
+    pass); returns the largest change of a contact-point velocity of its
+    bodies it made (m/s)."""
     first, count = MI1[m, FIRST], MI1[m, COUNT]
     a, b = I1[first, BODY_A], I1[first, BODY_B]
     p0 = load_pair(vel, omega, a, b)
@@ -405,7 +407,7 @@ def _update(R1, I1, M1, MI1, m, vel, omega, lever):
     if count < 2:
         p, _ = update_contact(R1, I1, first, p0)
     else:
-        p, _ = update_points(R1, M1, MI1, m, first, count, p0)
+        p, _ = update_points(R1, M1, MI1, m, first, count, p0, shares, first_pass)
     store_pair(vel, omega, a, b, p)
     return max(_point_change(p0, p, 0, lever), _point_change(p0, p, 6, lever))
 
@@ -421,14 +423,15 @@ def _settle(one_sided, vel, omega, passes, tolerance, store):
     while the body's velocity has long settled. It also stops when its
     change has stalled (STALL)."""
     R1, I1, M1, MI1 = one_sided
-    levers = take(store, len(MI1))
+    levers, shares = take(store, len(MI1)), take(store, len(R1))
     for m in range(len(MI1)):
         levers[m] = _lever(R1, MI1[m, FIRST], MI1[m, COUNT])
     last = earlier = math.inf
-    for _ in range(passes):
+    for sweep in range(passes):
         change = 0.0
         for m in range(len(MI1)):
-            change = max(change, _update(R1, I1, M1, MI1, m, vel, omega, levers[m]))
+            change = max(change, _update(R1, I1, M1, MI1, m, vel, omega, levers[m], shares,
+                                         sweep == 0))
         if tolerance > 0.0 and change < tolerance:
             break
         if change > STALL * earlier:
