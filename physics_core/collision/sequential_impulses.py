@@ -107,7 +107,25 @@ def update_normal(R, c, p):
 
 
 @njit(cache=True, inline="always")
-def even_share(R, first, count, p, shares, fresh):
+def face_shares(R, MI, shares):
+    """shares[c] = Σ_j W_cj over the points j of row c's manifold, for every
+    manifold of two or more points (even_share): the velocity change at c
+    for a unit impulse on every point. They depend on the rows alone, so
+    they are computed once for all the sweeps of a solve. Returns shares."""
+    for k in range(len(MI)):
+        first, count = MI[k, FIRST], MI[k, COUNT]
+        if count < 2:
+            continue
+        q = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        for c in range(first, first + count):
+            q = pair_impulse(R, c, 0, 1.0, q)
+        for c in range(first, first + count):
+            shares[c] = pair_velocity(R, c, 0, q)
+    return shares
+
+
+@njit(cache=True, inline="always")
+def even_share(R, first, count, p, shares):
     """The manifold's normal rows moved together, all from the velocities p:
     each λ_i by (b_i − u_i) / Σ_j W_ij (b_i its target, the bias; Σ_j W_ij
     its velocity change for a unit impulse on every point), kept ≥ 0. It
@@ -122,17 +140,10 @@ def even_share(R, first, count, p, shares, fresh):
     the plane), and the 10,000-box pyramid's rows leaned out of the wall
     (131 boxes moved more than 1 cm sideways in its first second; none
     now, and 2 at 3 s).
-    The shares depend on the rows alone, so they are computed once
-    (`fresh`) into shares[first:first + count] and read by the later
-    sweeps: computed every time, the box scenes' step took 18-20 % longer,
-    read, about 4 %. Returns (p after it, its largest |Δλ|: part of the
-    manifold's change, which stops the sweeps)."""
-    if fresh:
-        q = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-        for c in range(first, first + count):
-            q = pair_impulse(R, c, 0, 1.0, q)
-        for c in range(first, first + count):
-            shares[c] = pair_velocity(R, c, 0, q)
+    The shares Σ_j W_ij are read from `shares` (face_shares): computed at
+    every update, the box scenes' step took 18-20 % longer, read, about
+    4 %. Returns (p after it, its largest |Δλ|: part of the manifold's
+    change, which stops the sweeps)."""
     out, change = p, 0.0
     for c in range(first, first + count):
         if shares[c] > 0.0:
@@ -146,13 +157,13 @@ def even_share(R, first, count, p, shares, fresh):
 
 
 @njit(cache=True, inline="always")
-def update_points(R, M, MI, k, first, count, p, shares, fresh):
+def update_points(R, M, MI, k, first, count, p, shares):
     """One update of manifold k of two or more points (rows first..first +
     count − 1) on its pair's velocities p: their normal rows (first moved
-    together, even_share: `shares` their Σ_j W_ij, computed when `fresh`),
+    together, even_share: `shares` their Σ_j W_ij, face_shares),
     then their friction anchor (manifold_friction.py). Returns (p after
     it, its largest impulse change; NaN if any is NaN)."""
-    p, change = even_share(R, first, count, p, shares, fresh)
+    p, change = even_share(R, first, count, p, shares)
     for c in range(first, first + count):
         p, d = update_normal(R, c, p)
         if not d < change:
@@ -162,13 +173,12 @@ def update_points(R, M, MI, k, first, count, p, shares, fresh):
 
 
 @njit(cache=True)
-def sweep_manifolds(R, I, M, MI, vel, omega, changes, shares, fresh):
+def sweep_manifolds(R, I, M, MI, vel, omega, changes, shares):
     """One Gauss–Seidel sweep, manifold by manifold in key order, each on
     its two bodies' velocities loaded once and stored once
     (pair_velocity.py), each manifold's largest change written to
-    changes[k]; shares: a face's points' Σ_j W_ij (update_points),
-    computed when `fresh` (the first sweep of a substep: the rows do not
-    change between sweeps). Returns the largest change.
+    changes[k]; shares: a face's points' Σ_j W_ij (face_shares). Returns
+    the largest change.
     A single point is updated by update_contact, two or more by
     update_points, dispatched here: every further inlined layer the tuple
     of velocities is returned through made the sweep slower (a pile of
@@ -182,7 +192,7 @@ def sweep_manifolds(R, I, M, MI, vel, omega, changes, shares, fresh):
         if count < 2:
             p, d = update_contact(R, I, first, p)
         else:
-            p, d = update_points(R, M, MI, k, first, count, p, shares, fresh)
+            p, d = update_points(R, M, MI, k, first, count, p, shares)
         store_pair(vel, omega, a, b, p)
         changes[k] = d
         if not d < change:
@@ -213,12 +223,12 @@ def solve_velocities(R, I, M, MI, vel, omega, iterations, stops, changes):
     one was); changes[k] is manifold k's largest change in that last
     sweep."""
     limit, settle, stall = stops
-    shares = np.empty(len(R))
+    shares = face_shares(R, MI, np.empty(len(R)))
     change = previous = math.inf
     changes[:] = math.inf
     for sweep in range(iterations):
         earlier, previous = previous, change
-        change = sweep_manifolds(R, I, M, MI, vel, omega, changes, shares, sweep == 0)
+        change = sweep_manifolds(R, I, M, MI, vel, omega, changes, shares)
         if limit > 0.0 and change < limit:
             if not _settling(change, previous, settle, iterations - sweep - 1):
                 return sweep + 1, change

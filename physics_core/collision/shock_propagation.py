@@ -55,7 +55,7 @@ from .manifold_friction import COUNT, FIRST, IMA, IMB, M_LAM, TA, TB, _invert
 from .resting_block import MANIFOLDS, WS_SHAPE, settle_resting
 from .scratch import cursor, rewind, take, take_bools, take_int_rows, take_ints, take_rows
 from .pair_velocity import load_pair, store_pair
-from .sequential_impulses import update_contact, update_points
+from .sequential_impulses import face_shares, update_contact, update_points
 
 UNREACHED = np.int64(1) << 40
 # A body's sweeps have stalled when a sweep's change is above this fraction
@@ -395,10 +395,9 @@ def _point_change(p0, p, o, lever):
 
 
 @njit(cache=True, inline="always")
-def _update(R1, I1, M1, MI1, m, vel, omega, lever, shares, first_pass):
+def _update(R1, I1, M1, MI1, m, vel, omega, lever, shares):
     """One update of manifold m (a face's points first moved together,
-    sequential_impulses.update_points, their shares computed on the first
-    pass); returns the largest change of a contact-point velocity of its
+    sequential_impulses.update_points, with their shares); returns the largest change of a contact-point velocity of its
     bodies it made (m/s)."""
     first, count = MI1[m, FIRST], MI1[m, COUNT]
     a, b = I1[first, BODY_A], I1[first, BODY_B]
@@ -407,7 +406,7 @@ def _update(R1, I1, M1, MI1, m, vel, omega, lever, shares, first_pass):
     if count < 2:
         p, _ = update_contact(R1, I1, first, p0)
     else:
-        p, _ = update_points(R1, M1, MI1, m, first, count, p0, shares, first_pass)
+        p, _ = update_points(R1, M1, MI1, m, first, count, p0, shares)
     store_pair(vel, omega, a, b, p)
     return max(_point_change(p0, p, 0, lever), _point_change(p0, p, 6, lever))
 
@@ -423,15 +422,14 @@ def _settle(one_sided, vel, omega, passes, tolerance, store):
     while the body's velocity has long settled. It also stops when its
     change has stalled (STALL)."""
     R1, I1, M1, MI1 = one_sided
-    levers, shares = take(store, len(MI1)), take(store, len(R1))
+    levers, shares = take(store, len(MI1)), face_shares(R1, MI1, take(store, len(R1)))
     for m in range(len(MI1)):
         levers[m] = _lever(R1, MI1[m, FIRST], MI1[m, COUNT])
     last = earlier = math.inf
-    for sweep in range(passes):
+    for _ in range(passes):
         change = 0.0
         for m in range(len(MI1)):
-            change = max(change, _update(R1, I1, M1, MI1, m, vel, omega, levers[m], shares,
-                                         sweep == 0))
+            change = max(change, _update(R1, I1, M1, MI1, m, vel, omega, levers[m], shares))
         if tolerance > 0.0 and change < tolerance:
             break
         if change > STALL * earlier:
