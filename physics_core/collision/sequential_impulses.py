@@ -214,8 +214,8 @@ def solve_velocities(R, I, M, MI, vel, omega, iterations, stops, changes):
     changes almost no velocity, by about as much every sweep. A box's four
     corners share its load in a line of ways (resting_block.py), and on a
     pile of cubes at rest the sweeps move the load along that line,
-    converging at about 0.998 a sweep (its largest change 4.3e-5 N·s at the
-    third sweep and at the eighth); every other manifold has converged
+    converging at about 0.992 a sweep (its largest change 5.4e-5 N·s at the
+    third sweep, 5.2e-5 at the eighth); every other manifold has converged
     below that level.
     solve_stage passes shock_propagation.STALL where the shock sweep
     follows, which settles what they leave. A NaN change never stops early.
