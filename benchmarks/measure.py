@@ -2,7 +2,8 @@
 
 Steps/s is the mean over the timed run: a contact scene's work changes as
 it settles, so no single chunk stands for it (the fastest chunk is kept too,
-as `fastest_steps_per_second`).
+as `fastest_steps_per_second`). A run shorter than MIN_TIMED is made again
+from a freshly built scene and its fastest window kept (measure_here).
 
 A fresh process per measurement keeps one engine's caches and allocations
 out of another's numbers, and lets the peak resident memory (ru_maxrss) be
@@ -27,6 +28,8 @@ WARMUP = 5          # steps before timing: first contacts, caches, lazy set-up; 
                     # engine's step call cost tens of µs, and one call of WARMUP steps
                     # left this engine's first timed calls to pay them
 HEARTBEAT = 15.0    # s between progress lines of a long measurement
+MIN_TIMED = 0.2     # s: a run's window is timed again until the windows reach this in all
+MAX_WINDOWS = 200   # (measure_here), at most this many
 BUDGET = 120.0      # s of stepping at most (pile_compare's too): an engine still short of its steps then is
                     # reported over the steps it did (an early part of the run, which
                     # costs less than the rest once the contacts have formed)
@@ -48,11 +51,42 @@ def _peak_mb():
 
 
 def measure_here(scene_module, scene_function, n, engine, steps, budget=BUDGET):
+    """One engine's run of `steps` steps on the scene, in this process: a
+    window of the same run from a freshly built scene is timed again while
+    the windows so far took under MIN_TIMED seconds in all (at most
+    MAX_WINDOWS), and the fastest window is the one reported (its steps/s,
+    stages and what it left), with `windows` the number timed. A run of a
+    few bodies takes about a millisecond, and on a shared machine a single
+    such window came out anywhere within ±30 % of another: a 1-sphere run
+    gave this engine 2.3e5 to 3.7e5 steps/s and PyBullet 2.1e5 to 3.7e5 in
+    five runs each. Every engine gets the same rule, so the ratio is of
+    fastest to fastest."""
     from . import engines
     bodies = getattr(importlib.import_module(scene_module), scene_function)(n)
     # the engine's own module is imported before the baseline, so it does not count as scene memory
     importlib.import_module(engines.module_of(engine))
     base = _rss_mb()
+    best, spent, windows = None, 0.0, 0
+    while True:
+        w = _window(engines, engine, bodies, steps, budget)
+        windows += 1
+        spent += w["seconds"]
+        if best is None or w["steps"] / w["seconds"] > best["steps"] / best["seconds"]:
+            best = w
+        if w["steps"] < steps or spent >= MIN_TIMED or windows >= MAX_WINDOWS:
+            break
+    done, elapsed, pos = best["steps"], best["seconds"], best.pop("positions")
+    peak = _peak_mb()
+    return {"engine": engine, "bodies": len(bodies), "steps": done, "steps_asked": steps,
+            "steps_per_second": done / elapsed, "body_steps_per_second": len(bodies) * done / elapsed,
+            **best, "windows": windows, "peak_rss_mb": peak, "baseline_rss_mb": base,
+            "scene_mb": max(0.0, peak - base), "min_z": float(pos[:, 2].min()) if len(pos) else 0.0,
+            **left_by(bodies, pos)}
+
+
+def _window(engines, engine, bodies, steps, budget):
+    """One timed run from a freshly built scene (after WARMUP single steps): its
+    steps done, seconds, fastest chunk, build time, stages and end positions."""
     t0 = perf_counter()
     step, positions, stages = engines.build(engine, bodies)
     build = perf_counter() - t0
@@ -75,19 +109,12 @@ def measure_here(scene_module, scene_function, n, engine, steps, budget=BUDGET):
                              f"({last - t0:.0f} s)\n")
             sys.stderr.flush()
     elapsed = perf_counter() - t0
-    pos = positions()
     after = stages()
     # where this engine's time goes: seconds per step in each named stage
     profile = None if after is None else {
         k: (v - before.get(k, 0.0)) / done for k, v in after.items() if k != "step"}
-    peak = _peak_mb()
-    return {"engine": engine, "bodies": len(bodies), "steps": done, "steps_asked": steps,
-            "seconds": elapsed,
-            "steps_per_second": done / elapsed, "body_steps_per_second": len(bodies) * done / elapsed,
-            "fastest_steps_per_second": 1.0 / best,
-            "build_seconds": build, "peak_rss_mb": peak, "baseline_rss_mb": base,
-            "scene_mb": max(0.0, peak - base), "min_z": float(pos[:, 2].min()) if len(pos) else 0.0,
-            "stage_seconds_per_step": profile, **left_by(bodies, pos)}
+    return {"steps": done, "seconds": elapsed, "fastest_steps_per_second": 1.0 / best,
+            "build_seconds": build, "stage_seconds_per_step": profile, "positions": positions()}
 
 
 def left_by(bodies, pos):

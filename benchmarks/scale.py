@@ -9,7 +9,11 @@
 With `--repeat R` every measurement is made R times, the engines in turn
 within each round, and each engine's fastest run kept: this machine has
 slow phases that last whole processes, and the fastest of a few runs is
-the figure least moved by them.
+the figure least moved by them. Within one measurement, a run shorter
+than measure.MIN_TIMED (a few bodies' first second takes about a
+millisecond) is run again from a freshly built scene until its runs
+reach that time (at most measure.MAX_WINDOWS), and the fastest is kept,
+for every engine alike.
 
 Writes `scale.md`, `scale.json`, `scale_pyramid.png` and `scale_box_piles.png`.
 """
@@ -20,7 +24,7 @@ from . import engines
 from . import markdown as md
 from . import plotting
 from .contact_support import available
-from .measure import BUDGET, measure
+from .measure import BUDGET, MAX_WINDOWS, MIN_TIMED, measure
 from .progress import Progress
 from .results_io import machine, write_json, write_text
 
@@ -333,7 +337,11 @@ def _repeat_text(repeat):
             "one run does not count against one engine alone. For the pyramid and the box "
             "piles the engines ran one after the other in each round, and the last column "
             "gives this engine's steps/s over the faster peer's round by round: the spread "
-            "that noise leaves. The sphere piles repeat each engine's run in place.")
+            "that noise leaves. The sphere piles repeat each engine's run in place. "
+            f"Within one measurement, a run shorter than {MIN_TIMED:g} s (a few bodies' first "
+            "second takes about a millisecond) is made again from a freshly built scene until "
+            f"its runs reach {MIN_TIMED:g} s in all (at most {MAX_WINDOWS} of them), the fastest "
+            "kept, for every engine alike.")
 
 
 def _box_pile_doc():
