@@ -337,7 +337,7 @@ def _repeat_text(repeat):
             "one run does not count against one engine alone. For the pyramid and the box "
             "piles the engines ran one after the other in each round, and the last column "
             "gives this engine's steps/s over the faster peer's round by round: the spread "
-            "that noise leaves. The sphere piles repeat each engine's run in place. "
+            "that noise leaves. The sphere piles run the engines in turn in each round too, in one process. "
             f"Within one measurement, a run shorter than {MIN_TIMED:g} s (a few bodies' first "
             "second takes about a millisecond) is made again from a freshly built scene until "
             f"its runs reach {MIN_TIMED:g} s in all (at most {MAX_WINDOWS} of them), the fastest "
