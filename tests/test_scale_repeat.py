@@ -66,18 +66,18 @@ def test_a_short_run_is_timed_again_from_a_fresh_scene_and_its_fastest_window_ke
     # a little longer than its figure; the fastest is still the third
     monkeypatch.setattr(engines, "build", _fake_engine([0.004, 0.003, 0.001, 0.002, 0.05], built))
     monkeypatch.setattr(measure, "MIN_TIMED", 0.0095)
-    out = measure.measure_here("benchmarks.pyramid", "boxes", 1, "pybullet", 240)
+    out = measure.measure_here("benchmarks.pyramid", "boxes", 1, "physics_core", 240)
     assert out["windows"] == 4 and len(built) == 4     # 4 + 3 + 1 + 2 ms reach 9.5 ms
     assert out["min_z"] == 2.0                          # the third window's end
     assert 0.8 * 240 / 0.001 < out["steps_per_second"] < 240 / 0.001
     monkeypatch.setattr(measure, "MAX_WINDOWS", 2)
     built.clear()
-    assert measure.measure_here("benchmarks.pyramid", "boxes", 1, "pybullet", 240)["windows"] == 2
+    assert measure.measure_here("benchmarks.pyramid", "boxes", 1, "physics_core", 240)["windows"] == 2
 
 
 def test_a_run_as_long_as_the_floor_is_timed_once(monkeypatch):
     from benchmarks import engines, measure
     built = []
     monkeypatch.setattr(engines, "build", _fake_engine([0.25, 0.001], built))
-    assert measure.measure_here("benchmarks.pyramid", "boxes", 1, "pybullet", 240)["windows"] == 1
+    assert measure.measure_here("benchmarks.pyramid", "boxes", 1, "physics_core", 240)["windows"] == 1
     assert built == [0]
