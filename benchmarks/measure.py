@@ -66,16 +66,9 @@ def measure_here(scene_module, scene_function, n, engine, steps, budget=BUDGET):
     # the engine's own module is imported before the baseline, so it does not count as scene memory
     importlib.import_module(engines.module_of(engine))
     base = _rss_mb()
-    best, spent, windows = None, 0.0, 0
-    while True:
-        w = _window(engines, engine, bodies, steps, budget)
-        windows += 1
-        spent += w["seconds"]
-        if best is None or w["steps"] / w["seconds"] > best["steps"] / best["seconds"]:
-            best = w
-        if w["steps"] < steps or spent >= MIN_TIMED or windows >= MAX_WINDOWS:
-            break
-    done, elapsed, pos = best["steps"], best["seconds"], best.pop("positions")
+    (done, elapsed, best), windows = fastest_run(
+        lambda: _window(engines, engine, bodies, steps, budget), steps)
+    pos = best.pop("positions")
     peak = _peak_mb()
     return {"engine": engine, "bodies": len(bodies), "steps": done, "steps_asked": steps,
             "steps_per_second": done / elapsed, "body_steps_per_second": len(bodies) * done / elapsed,
@@ -84,9 +77,26 @@ def measure_here(scene_module, scene_function, n, engine, steps, budget=BUDGET):
             **left_by(bodies, pos)}
 
 
+def fastest_run(run_once, steps):
+    """(the fastest of one run or more, how many were made): `run_once()`
+    returns (steps done, seconds, ...), and runs are made again while each
+    finished its `steps` and all took under MIN_TIMED seconds (at most
+    MAX_WINDOWS); fastest by steps done over seconds."""
+    best, spent, runs = None, 0.0, 0
+    while True:
+        r = run_once()
+        runs += 1
+        spent += r[1]
+        if best is None or r[0] / r[1] > best[0] / best[1]:
+            best = r
+        if r[0] < steps or spent >= MIN_TIMED or runs >= MAX_WINDOWS:
+            return best, runs
+
+
 def _window(engines, engine, bodies, steps, budget):
-    """One timed run from a freshly built scene (after WARMUP single steps): its
-    steps done, seconds, fastest chunk, build time, stages and end positions."""
+    """One timed run from a freshly built scene (after WARMUP single steps):
+    (steps done, seconds, {its steps, seconds, fastest chunk, build time,
+    stages and end positions})."""
     t0 = perf_counter()
     step, positions, stages = engines.build(engine, bodies)
     build = perf_counter() - t0
@@ -113,8 +123,9 @@ def _window(engines, engine, bodies, steps, budget):
     # where this engine's time goes: seconds per step in each named stage
     profile = None if after is None else {
         k: (v - before.get(k, 0.0)) / done for k, v in after.items() if k != "step"}
-    return {"steps": done, "seconds": elapsed, "fastest_steps_per_second": 1.0 / best,
-            "build_seconds": build, "stage_seconds_per_step": profile, "positions": positions()}
+    return done, elapsed, {"steps": done, "seconds": elapsed, "fastest_steps_per_second": 1.0 / best,
+                           "build_seconds": build, "stage_seconds_per_step": profile,
+                           "positions": positions()}
 
 
 def left_by(bodies, pos):

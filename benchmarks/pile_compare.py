@@ -36,7 +36,7 @@ from time import perf_counter, process_time
 import numpy as np
 
 from . import engines
-from .measure import BUDGET, MAX_WINDOWS, MIN_TIMED   # s of stepping per engine and size, at most; repeated short runs
+from .measure import BUDGET, fastest_run     # s of stepping per engine and size, at most
 
 SIZES = (100, 1000, 10000)
 STEPS = 240
@@ -86,26 +86,14 @@ def time_engine(engine, bodies, steps, budget):
 
 
 def _fastest_run(engine, bodies, steps, budget, log):
-    """(steps, CPU s, stages) of the fastest of one run or more: runs are made
-    until they took MIN_TIMED CPU seconds in all (at most MAX_WINDOWS), as
-    measure.py times a fresh process's windows, so a run of a few bodies
-    (about a millisecond) is not one noisy reading."""
-    best, spent, runs = None, 0.0, 0
-    while True:
-        done, cpu, wall, prof = time_engine(engine, bodies, steps, budget)
-        runs += 1
-        spent += cpu
-        if runs == 1:
-            log(f"  {len(bodies)} spheres, {engine}: {done} steps in {cpu:.2f} s CPU "
-                f"({wall:.2f} s wall), {done / cpu:.3g} steps/s")
-        if best is None or done / cpu > best[0] / best[1]:
-            best = (done, cpu, prof)
-        if done < steps or spent >= MIN_TIMED or runs >= MAX_WINDOWS:
-            break
-    if runs > 1:
-        log(f"  {len(bodies)} spheres, {engine}: fastest of {runs} runs "
-            f"{best[0] / best[1]:.3g} steps/s")
-    return best
+    """(steps, CPU s, stages) of the fastest of one run or more
+    (measure.fastest_run: a run of a few bodies, about a millisecond, is
+    made again until the runs reach MIN_TIMED CPU seconds)."""
+    (done, cpu, wall, prof), runs = fastest_run(
+        lambda: time_engine(engine, bodies, steps, budget), steps)
+    log(f"  {len(bodies)} spheres, {engine}: {done} steps in {cpu:.2f} s CPU ({wall:.2f} s wall), "
+        f"{done / cpu:.3g} steps/s" + (f", the fastest of {runs} runs" if runs > 1 else ""))
+    return done, cpu, prof
 
 
 def _runnable(engine, n, per_step, steps, budget, row, log):
