@@ -2,6 +2,8 @@
 fastest run is kept, every round's figure is kept beside it, a failed run
 never wins, the per-round ratios pair runs of the same round, and a run
 shorter than measure.MIN_TIMED is timed again, its fastest window kept."""
+import pytest
+
 from benchmarks import scale
 
 
@@ -34,13 +36,19 @@ def test_round_ratios_compare_runs_of_the_same_round_with_the_faster_peer():
     assert scale.round_ratios(per) == [2.0, 3.0]
 
 
-def _fake_engine(seconds_per_window, built):
+def _fake_engine(seconds_per_window, built, monkeypatch):
     """engines.build stand-in: the k-th scene built steps its whole window in
-    seconds_per_window[k] (busy wait, spread over the calls) and ends at
-    z = k, so the kept window can be told apart."""
-    import time
-
+    seconds_per_window[k] and ends at z = k, so the kept window can be told
+    apart. Its steps advance a clock that stands in for measure's
+    perf_counter: timed on the real clock (a busy wait), a window of 4 ms
+    measured 9.5 ms or more while other processes held both cores, and the
+    run stopped after one window (the bug of
+    test_the_windows_are_counted_on_a_clock_no_other_process_moves)."""
     import numpy as np
+
+    from benchmarks import measure
+    clock = [0.0]
+    monkeypatch.setattr(measure, "perf_counter", lambda: clock[0])
 
     def build(engine, bodies):
         k = len(built)
@@ -48,9 +56,7 @@ def _fake_engine(seconds_per_window, built):
         per_step = seconds_per_window[k] / 240
 
         def step(n):
-            end = time.perf_counter() + n * per_step
-            while time.perf_counter() < end:
-                pass
+            clock[0] += n * per_step
         return step, (lambda: np.array([[0.0, 0.0, float(k)]])), (lambda: None)
     return build
 
@@ -62,14 +68,14 @@ def test_a_short_run_is_timed_again_from_a_fresh_scene_and_its_fastest_window_ke
     3.7e5 steps/s over five runs), so the ratio at one body was noise."""
     from benchmarks import engines, measure
     built = []
-    # the warm-up's 5 single steps run at the same pace, so every window is
-    # a little longer than its figure; the fastest is still the third
-    monkeypatch.setattr(engines, "build", _fake_engine([0.004, 0.003, 0.001, 0.002, 0.05], built))
+    # the warm-up's 5 single steps are not in the window
+    monkeypatch.setattr(engines, "build", _fake_engine([0.004, 0.003, 0.001, 0.002, 0.05], built,
+                                                       monkeypatch))
     monkeypatch.setattr(measure, "MIN_TIMED", 0.0095)
     out = measure.measure_here("benchmarks.pyramid", "boxes", 1, "physics_core", 240)
     assert out["windows"] == 4 and len(built) == 4     # 4 + 3 + 1 + 2 ms reach 9.5 ms
     assert out["min_z"] == 2.0                          # the third window's end
-    assert 0.8 * 240 / 0.001 < out["steps_per_second"] < 240 / 0.001
+    assert out["steps_per_second"] == pytest.approx(240 / 0.001, rel=1e-9)
     monkeypatch.setattr(measure, "MAX_WINDOWS", 2)
     built.clear()
     assert measure.measure_here("benchmarks.pyramid", "boxes", 1, "physics_core", 240)["windows"] == 2
@@ -78,6 +84,18 @@ def test_a_short_run_is_timed_again_from_a_fresh_scene_and_its_fastest_window_ke
 def test_a_run_as_long_as_the_floor_is_timed_once(monkeypatch):
     from benchmarks import engines, measure
     built = []
-    monkeypatch.setattr(engines, "build", _fake_engine([0.25, 0.001], built))
+    monkeypatch.setattr(engines, "build", _fake_engine([0.25, 0.001], built, monkeypatch))
     assert measure.measure_here("benchmarks.pyramid", "boxes", 1, "physics_core", 240)["windows"] == 1
     assert built == [0]
+
+
+def test_the_windows_are_counted_on_a_clock_no_other_process_moves(monkeypatch):
+    """The bug this guards: the windows' count depended on how busy the
+    machine was. On the fake clock, windows of 4, 3, 1 and 2 ms reach a
+    floor of 9.5 ms after four windows, and one of 9 ms is timed again."""
+    from benchmarks import engines, measure
+    built = []
+    monkeypatch.setattr(engines, "build", _fake_engine([0.009, 0.004, 0.05], built, monkeypatch))
+    monkeypatch.setattr(measure, "MIN_TIMED", 0.0095)
+    out = measure.measure_here("benchmarks.pyramid", "boxes", 1, "physics_core", 240)
+    assert out["windows"] == 2 and out["min_z"] == 1.0
