@@ -93,8 +93,8 @@ MUTATIONS = (
              (T + "test_narrowphase.py", T + "test_detection_kernels.py")),
     # ---- rows ------------------------------------------------------------------------
     Mutation("second tangent not orthogonal to the normal", "rows", C + "contact_build.py",
-             "R[c, DIR + 6], R[c, DIR + 7], R[c, DIR + 8] = b, sign + ny * ny * a, -ny",
-             "R[c, DIR + 6], R[c, DIR + 7], R[c, DIR + 8] = b, sign + ny * ny * a, ny",
+             "R[c, t2], R[c, t2 + 1], R[c, t2 + 2] = b, sign + ny * ny * a, -ny",
+             "R[c, t2], R[c, t2 + 1], R[c, t2 + 2] = b, sign + ny * ny * a, ny",
              (T + "test_contact_frame.py", T + "test_collisions_friction.py")),
     Mutation("lever arm r × d with the wrong sign in x", "rows", C + "contact_build.py",
              "cx, cy, cz = ry * dz - rz * dy, rz * dx - rx * dz, rx * dy - ry * dx",

@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 
 from physics_core import load_scene
+from physics_core.collision.contact_layout import DIR, direction_columns
 from substep_rows import pass_applied, rows_before_solve
 
 DT = 1 / 240
@@ -134,7 +135,8 @@ def test_bounce_friction_is_shared_by_the_points_in_proportion_to_their_impulses
     lam = J[:, 0]
     assert len(lam) == 4 and lam.min() > 0.0 and lam.max() > 1.2 * lam.min()
     # each point's tangential share as a world vector
-    share = J[:, 1:2] * R[:, 3:6] + J[:, 2:3] * R[:, 6:9]
+    t = direction_columns(DIR)
+    share = J[:, 1:2] * R[:, t[3:6]] + J[:, 2:3] * R[:, t[6:9]]
     per_lambda = share / lam[:, None]
     np.testing.assert_allclose(per_lambda, np.broadcast_to(per_lambda[0], (4, 3)), atol=1e-12)
     tangential = (vel[1] - v_before) * 1.0            # m = 1 kg, the floor static

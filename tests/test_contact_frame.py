@@ -10,14 +10,14 @@ along x), where that sign does not show, and it survived them all.
 import numpy as np
 
 from physics_core.collision.contact_build import tangent_frame
-from physics_core.collision.contact_layout import DIR, NCOL
+from physics_core.collision.contact_layout import DIR, NCOL, direction_columns
 
 
 def _frames(normals):
     R = np.zeros((len(normals), NCOL))
     for c, (nx, ny, nz) in enumerate(normals):
         tangent_frame(R, c, nx, ny, nz)
-    return R[:, DIR:DIR + 9].reshape(-1, 3, 3)     # rows n, t1, t2
+    return R[:, direction_columns(DIR)].reshape(-1, 3, 3)     # rows n, t1, t2
 
 
 def test_contact_frame_is_orthonormal_and_right_handed_for_any_normal():

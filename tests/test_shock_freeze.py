@@ -17,10 +17,10 @@ from hypothesis import strategies as st
 
 from physics_core.collision import shock_propagation as SP
 from physics_core.collision.contact_build import effective_masses
-from physics_core.collision.contact_layout import (ARM_A, DIR, G_TN, INV_MASS_A, INV_MASS_B, K_A,
-                                                   K_B, MASS_N, NCOL, TURN_A, TURN_B, W_TT,
-                                                   W_TT_INV)
-from physics_core.collision.manifold_friction import IMA, IMB, MCOL, TA, TB, _invert
+from physics_core.collision.contact_layout import (ARM_A, ARM_B, DIR, G_TN, INV_MASS_A, INV_MASS_B,
+                                                   K_A, K_B, MASS_N, NCOL, TURN_A, TURN_B, W_TT,
+                                                   W_TT_INV, direction_columns)
+from physics_core.collision.manifold_friction import IMA, IMB, MCOL, TA, TB, W_INV, _invert
 
 # the columns only a single point's friction reads (sequential_impulses.update_contact)
 POINT_ONLY = [W_TT + i for i in range(4)] + [W_TT_INV + i for i in range(4)] + [G_TN, G_TN + 1,
@@ -33,14 +33,14 @@ def _row(seed, frozen_side=None):
     R = np.zeros((1, NCOL))
     n = rng.normal(size=3)
     R[0, DIR:DIR + 3] = n / np.linalg.norm(n)
-    R[0, DIR + 3:DIR + 9] = rng.normal(size=6)
-    R[0, ARM_A:ARM_A + 18] = rng.normal(size=18)       # arms of a and b
-    R[0, TURN_A:TURN_A + 18] = rng.normal(size=18)     # turns of a and b
+    R[0, direction_columns(DIR)[3:]] = rng.normal(size=6)
+    R[0, direction_columns(ARM_A) + direction_columns(ARM_B)] = rng.normal(size=18)
+    R[0, direction_columns(TURN_A) + direction_columns(TURN_B)] = rng.normal(size=18)
     R[0, INV_MASS_A], R[0, INV_MASS_B] = rng.uniform(0.1, 10.0, 2)
     if frozen_side is not None:
         R[0, INV_MASS_A if frozen_side == 0 else INV_MASS_B] = 0.0
         turn = TURN_A if frozen_side == 0 else TURN_B
-        R[0, turn:turn + 9] = 0.0
+        R[0, direction_columns(turn)] = 0.0
     effective_masses(R, 0)
     return R
 
@@ -50,7 +50,7 @@ def _full_freeze(R, side):
     out = R.copy()
     out[0, INV_MASS_A if side == 0 else INV_MASS_B] = 0.0
     turn = TURN_A if side == 0 else TURN_B
-    out[0, turn:turn + 9] = 0.0
+    out[0, direction_columns(turn)] = 0.0
     effective_masses(out, 0)
     return out
 
@@ -79,10 +79,11 @@ def test_freezing_a_side_already_immovable_changes_no_bit(seed, side, anchored):
 
 def test_a_negative_zero_turn_is_not_taken_for_an_immovable_side():
     R = _row(7, frozen_side=1)
-    R[0, TURN_B + 4] = -0.0
+    col = direction_columns(TURN_B)[4]                       # t1's, about y
+    R[0, col] = -0.0
     assert not SP._held(R, 0, INV_MASS_B, TURN_B)
     SP._freeze_row(R, 0, 1)
-    assert np.copysign(1.0, R[0, TURN_B + 4]) == 1.0       # written as the freeze writes it
+    assert np.copysign(1.0, R[0, col]) == 1.0               # written as the freeze writes it
 
 
 @settings(max_examples=100, deadline=None)
@@ -90,14 +91,14 @@ def test_a_negative_zero_turn_is_not_taken_for_an_immovable_side():
 def test_an_anchor_frozen_twice_is_the_anchor_frozen_once(seed, side):
     rng = np.random.default_rng(seed)
     M = np.zeros((1, MCOL))
-    M[0, :47] = rng.normal(size=47)
+    M[0, :W_INV] = rng.normal(size=W_INV)      # directions, arms, turns, inverse masses
     M[0, IMA], M[0, IMB] = rng.uniform(0.1, 10.0, 2)
     w = np.zeros((3, 3))
     SP._freeze_anchor(M, 0, side)
     _invert(M, 0, w)                     # as _frozen_masses gives it
     once = M.copy()
     turn = TA if side == 0 else TB
-    assert M[0, IMA if side == 0 else IMB] == 0.0 and not M[0, turn:turn + 9].any()
+    assert M[0, IMA if side == 0 else IMB] == 0.0 and not M[0, direction_columns(turn)].any()
     SP._freeze_anchor(M, 0, side)
     assert M.tobytes() == once.tobytes()
     _invert(M, 0, w)

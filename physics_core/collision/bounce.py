@@ -34,7 +34,7 @@ import math
 from numba import njit
 
 from .contact_build import row_velocity
-from .contact_layout import (BODY_A, BODY_B, DEPTH, DIR, E, LAM, MU_K, MU_S, U0,
+from .contact_layout import (BODY_A, BODY_B, DEPTH, DIR, E, LAM, MU_K, MU_S, STRIDE, U0,
                              W_TT_INV)
 from .sequential_impulses import apply_impulse
 
@@ -71,7 +71,7 @@ def impact(u_start, u_end, depth, h):
     return u_start + tau * (u_end - u_start), tau
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def bounce_friction(R, c, a, b, jn, vel, omega):
     """Friction on a bounce impulse jn (COURSE.md 5): the tangential impulse
     that stops the slip if it lies within μ_s jn, else μ_k jn against the
@@ -137,4 +137,5 @@ def add_bounces(R, J, friction):
         for r in range(3):
             R[c, LAM + r] += J[c, r]
         for i in range(3):
-            friction[c, i] += J[c, 1] * R[c, DIR + 3 + i] + J[c, 2] * R[c, DIR + 6 + i]
+            friction[c, i] += (J[c, 1] * R[c, DIR + STRIDE + i]
+                               + J[c, 2] * R[c, DIR + 2 * STRIDE + i])

@@ -25,7 +25,7 @@ has no part there.
 """
 from numba import njit
 
-from .contact_layout import DIR
+from .contact_layout import DIR, STRIDE
 from .manifold_friction import L, M_MU_S, anchor_cap, anchor_stopping
 from .pair_velocity import load_pair, pair_impulses, store_pair
 
@@ -34,15 +34,15 @@ from .pair_velocity import load_pair, pair_impulses, store_pair
 def _share(M, k, R, first, end, lam, n0, n1, ln, J):
     """J[c, 1:3] += the part λ_c / ln of the tangential impulse n0 t1 + n1 t2
     (the anchor's tangents) in row c's own tangents."""
-    F0 = n0 * M[k, L] + n1 * M[k, L + 3]
-    F1 = n0 * M[k, L + 1] + n1 * M[k, L + 4]
-    F2 = n0 * M[k, L + 2] + n1 * M[k, L + 5]
+    F0 = n0 * M[k, L] + n1 * M[k, L + STRIDE]
+    F1 = n0 * M[k, L + 1] + n1 * M[k, L + STRIDE + 1]
+    F2 = n0 * M[k, L + 2] + n1 * M[k, L + STRIDE + 2]
     for c in range(first, end):
         if not lam[c] > 0.0:
             continue
         w = lam[c] / ln
         for r in (1, 2):
-            o = DIR + 3 * r
+            o = DIR + STRIDE * r
             f = 0.0
             f += F0 * R[c, o]
             f += F1 * R[c, o + 1]

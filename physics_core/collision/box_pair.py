@@ -50,7 +50,7 @@ def workspace():
     return np.zeros((WS_ROWS, 8))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _load(f, s, dims, pos, quat, ws):
     """Boxes f (a) and s (b) into ws: axes, centres, offset, half extents,
     then C = A Bᵀ and t in both frames (sums over strided axes in
@@ -70,7 +70,7 @@ def _load(f, s, dims, pos, quat, ws):
         ws[TB, i] = dot_seq(ws[B + i, 0], ws[B + i, 1], ws[B + i, 2], ws[T, 0], ws[T, 1], ws[T, 2])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _face_gap(ws, own, ta, i):
     """Separation along face normal i of box a (own = HA, ta = TA) or b
     (HB, TB):
@@ -83,12 +83,12 @@ def _face_gap(ws, own, ta, i):
     return (abs(ws[ta, i]) - ws[own, i]) - spread
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _gap(dist, ra, rb, length):
     return (dist - ra - rb) / length if length > EDGE_EPS else -np.inf
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _edge_gap(ws, i, j):
     """Separation along L = A_i × B_j, from C alone (Ericson 4.4.1): in a's
     frame L = (0, -C_{i+2,j}, C_{i+1,j}) (cyclic from i), |L|² = C_{i+1,j}² +
@@ -101,7 +101,7 @@ def _edge_gap(ws, i, j):
     return _gap(abs(ws[TA, i2] * c1 - ws[TA, i1] * c2), ra, rb, math.sqrt(c1 * c1 + c2 * c2))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _better(x, best):
     """np.argmax's step: a later value wins when not <= the best so far
     (so the first maximum stays, and a NaN wins and then stays); `|` and `&`
@@ -109,7 +109,7 @@ def _better(x, best):
     return ((x > best) | (x != x)) & (best == best)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _best_face(ws, own, ta):
     """(axis, separation) of one box's face of largest separation (np.argmax's rule)."""
     best, at = _face_gap(ws, own, ta, 0), 0
@@ -120,7 +120,7 @@ def _best_face(ws, own, ta):
     return at, best
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _best_edge(ws):
     """(flat index 3 i + j, separation) of the edge axis of largest separation."""
     best, at = _edge_gap(ws, 0, 0), 0
@@ -131,7 +131,7 @@ def _best_edge(ws):
     return at, best
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def argmax_row(ws, row, start, count):
     """np.argmax of ws[row, start:start + count]: the first maximum (a NaN first)."""
     best, at = ws[row, start], 0
@@ -142,7 +142,7 @@ def argmax_row(ws, row, start, count):
     return at, best
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def nan_max(a, b):
     """np.maximum of two floats: NaN if either is NaN."""
     if a != a or b != b:
@@ -182,7 +182,7 @@ def box_box(f, s, dims, pos, quat, margin, ws, out, k):
 
 # ---- edge–edge -------------------------------------------------------------------
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _edge_direction(ws, i, j):
     """Unit world axis A_i × B_j = -C_{i+2,j} A_{i+1} + C_{i+1,j} A_{i+2} (narrow_box.edge_axis)."""
     i1, i2 = (i + 1) % 3, (i + 2) % 3
@@ -194,7 +194,7 @@ def _edge_direction(ws, i, j):
     return l0 / norm, l1 / norm, l2 / norm
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _weight(ws, axes, half, m, skip, n0, n1, n2):
     """s_m h_m with s_m = sign(axis_m·n), 0 on the edge's own axis."""
     if m == skip:
@@ -202,7 +202,7 @@ def _weight(ws, axes, half, m, skip, n0, n1, n2):
     return sign(dot_seq(ws[axes + m, 0], ws[axes + m, 1], ws[axes + m, 2], n0, n1, n2)) * ws[half, m]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _edge_offset(ws, axes, half, skip, n0, n1, n2):
     """Σ_m s_m h_m axis_m: from a box's centre to its edge (along axis `skip`)
     furthest along n."""
@@ -214,7 +214,7 @@ def _edge_offset(ws, axes, half, skip, n0, n1, n2):
             dot_seq(w0, w1, w2, ws[axes, 2], ws[axes + 1, 2], ws[axes + 2, 2]))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _edge_params(ws, i, j, r0, r1, r2):
     """Closest points of lines p + s d1, q + u d2 (unit d, r = p - q):
     s = (b f - c) / (1 - b²), u = f + s b with b = d1·d2, c = d1·r, f = d2·r,
@@ -230,7 +230,7 @@ def _edge_params(ws, i, j, r0, r1, r2):
     return clip(u * bb - c, -lim1, lim1), u
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def edge_contact(i, j, sep, ws, out, k):
     """One point midway between the closest points of edge i of box a (the
     one furthest along n) and edge j of box b (furthest along -n); depth -sep."""
@@ -251,7 +251,7 @@ def edge_contact(i, j, sep, ws, out, k):
 
 # ---- face contact: the incident face clipped to the reference face ----------------
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def face_contact(use_b, axis, margin, ws, out, k):
     """Reference face: box b's face `axis` when use_b, else box a's; the
     incident face of the other box is clipped to its rectangle
@@ -274,7 +274,7 @@ def face_contact(use_b, axis, margin, ws, out, k):
     return _face_rows(ws, use_b, out, k)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _reference_frame(ws, ref_ax, ref_h, axis, n0, n1, n2, ref_c):
     """FRAME rows U, V (the face's edges), n; FC = the face centre c + n h_axis
     (c: row ref_c)."""
@@ -286,7 +286,7 @@ def _reference_frame(ws, ref_ax, ref_h, axis, n0, n1, n2, ref_c):
     ws[FC, 0], ws[FC, 1], ws[FC, 2] = ws[ref_c, 0] + n0 * h, ws[ref_c, 1] + n1 * h, ws[ref_c, 2] + n2 * h
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _incident_face(ws, inc_ax, inc_h, inc_c):
     """The face of the other box most opposed to n: its outward normal NINC,
     edge directions E1, E2 and centre IC in the reference frame (the other
@@ -309,13 +309,13 @@ def _incident_face(ws, inc_ax, inc_h, inc_c):
     return ws[inc_h, j1], ws[inc_h, j2]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _set_candidate(ws, c, u, v, w, ok):
     ws[CAND + c, 0], ws[CAND + c, 1], ws[CAND + c, 2] = u, v, w
     ws[CAND + c, 3] = 1.0 if ok else 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _corner_candidates(ws, hu, hv, eps, h1, h2):
     """Candidates 0–3: incident corners P_q (inside the rectangle?); 4–7:
     rectangle corners lifted onto the incident face's plane n·(x - ic) = 0
@@ -334,7 +334,7 @@ def _corner_candidates(ws, hu, hv, eps, h1, h2):
         _set_candidate(ws, 4 + q, cu, cv, ws[IC, 2] + dw, in1 & in2)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _crossing_candidates(ws, hu, hv, eps):
     """Candidates 8–23: incident edge q (corner q to q+1) crossing the side
     u = ±hu (8 + 2 q + side) or v = ±hv (16 + 2 q + side), at fraction
@@ -357,7 +357,7 @@ def _crossing_candidates(ws, hu, hv, eps):
                 _set_candidate(ws, 8 + 8 * along + 2 * q + sd, u, v, ws[P + q, 2] + fr * ws[D + q, 2], ok)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _diagonal_gains(ws, hu, hv, h1, h2):
     """(g1u, g1v, g2u, g2v): a candidate's coordinates along the smaller
     face's two axes, scaled by its half sizes, are u g_u + v g_v."""
@@ -366,7 +366,7 @@ def _diagonal_gains(ws, hu, hv, h1, h2):
     return 1.0 / hu, 0.0, 0.0, 1.0 / hv
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _track(x, c, best, at, exact):
     """One step of np.argmax over candidates: (best, at) after candidate c of
     value x. `exact` applies its NaN rule; without it a plain `>` (the same
@@ -375,7 +375,7 @@ def _track(x, c, best, at, exact):
     return (x if take else best), (c if take else at)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _keep_candidate(ws, c, hu, hv, margin):
     """Candidate c cut at the margin and clamped to the rectangle; returns (u, v, kept)."""
     row = CAND + c
@@ -385,7 +385,7 @@ def _keep_candidate(ws, c, hu, hv, margin):
     return u, v, ok
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _keep_candidates(ws, hu, hv, h1, h2, margin):
     """Cut the candidates at the margin and clamp them to the rectangle; store
     each one's coordinates (a1, a2) along the smaller face's two axes, scaled
@@ -393,6 +393,8 @@ def _keep_candidates(ws, hu, hv, h1, h2, margin):
     g1u, g1v, g2u, g2v = _diagonal_gains(ws, hu, hv, h1, h2)
     nan = False
     for c in range(CANDIDATES):
+        if ws[CAND + c, 3] == 0.0:      # not a clip point: stays out (_reduce)
+            continue
         u, v, ok = _keep_candidate(ws, c, hu, hv, margin)
         a1, a2 = u * g1u + v * g1v, u * g2u + v * g2v
         ws[CAND + c, 4], ws[CAND + c, 5] = a1, a2
@@ -400,7 +402,7 @@ def _keep_candidates(ws, hu, hv, h1, h2, margin):
     return nan
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _along(ws, c, q):
     """How far candidate c lies along diagonal q; -inf when not kept."""
     row = CAND + c
@@ -408,7 +410,7 @@ def _along(ws, c, q):
     return x if ws[row, 3] != 0.0 else -np.inf
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _reduce(ws, hu, hv, h1, h2, margin):
     """Keep candidates less than `margin` above the face, clamped to the
     rectangle; for each diagonal direction q of the smaller face pick the
@@ -418,6 +420,11 @@ def _reduce(ws, hu, hv, h1, h2, margin):
     b0 = b1 = b2 = b3 = -np.inf     # np.argmax from candidate 0: the same as starting at -inf
     t0 = t1 = t2 = t3 = 0
     for c in range(CANDIDATES):
+        # a candidate left out is -inf along every diagonal, which never
+        # beats the start: skipping it picks the same ones (a face pair keeps
+        # a few of the 24; tracking all of them took half a box pair's time)
+        if ws[CAND + c, 3] == 0.0:
+            continue
         b0, t0 = _track(_along(ws, c, 0), c, b0, t0, exact)
         b1, t1 = _track(_along(ws, c, 1), c, b1, t1, exact)
         b2, t2 = _track(_along(ws, c, 2), c, b2, t2, exact)
@@ -427,7 +434,7 @@ def _reduce(ws, hu, hv, h1, h2, margin):
             ws[PICK + q, m] = ws[CAND + at, m]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _merge_coincident(ws, eps):
     """Drop a picked point that repeats an earlier kept one (within 4 eps, L1)."""
     for q in range(1, 4):
@@ -438,12 +445,12 @@ def _merge_coincident(ws, eps):
                 ws[PICK + q, 3] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _face_point(ws, m, u, v, w):
     return ((ws[FC, m] + u * ws[FRAME, m]) + v * ws[FRAME + 1, m]) + (0.5 * w) * ws[FRAME + 2, m]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _face_rows(ws, use_b, out, k):
     """Rows of the kept picks: point fc + u U + v V + (w / 2) n (midway
     between the faces), depth -w, normal ±n (from the first box), slot

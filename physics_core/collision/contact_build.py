@@ -21,8 +21,8 @@ from numba import njit
 
 from ..quaternion import row4, to_matrix_one
 from .contact_layout import (ARM_A, ARM_B, BIAS, BODY_A, BODY_B, DEPTH, DIR, E, G_TN, INV_MASS_A,
-                             INV_MASS_B, K_A, K_B, LAM, MASS_N, MU, MU_K, MU_S, SLIDING, TURN_A,
-                             TURN_B, U0, W_TT, W_TT_INV)
+                             INV_MASS_B, K_A, K_B, LAM, MASS_N, MU, MU_K, MU_S, SLIDING, STRIDE,
+                             TURN_A, TURN_B, U0, W_TT, W_TT_INV)
 from .scratch import take_bools, take_rows
 
 RESTITUTION_RULES = {"effective_mass": 0, "mean": 1, "min": 2, "max": 3}
@@ -64,9 +64,10 @@ def tangent_frame(R, c, nx, ny, nz):
     sign = 1.0 if nz >= 0.0 else -1.0
     a = -1.0 / (sign + nz)
     b = nx * ny * a
-    R[c, DIR + 0], R[c, DIR + 1], R[c, DIR + 2] = nx, ny, nz
-    R[c, DIR + 3], R[c, DIR + 4], R[c, DIR + 5] = 1.0 + sign * nx * nx * a, sign * b, -sign * nx
-    R[c, DIR + 6], R[c, DIR + 7], R[c, DIR + 8] = b, sign + ny * ny * a, -ny
+    t1, t2 = DIR + STRIDE, DIR + 2 * STRIDE
+    R[c, DIR], R[c, DIR + 1], R[c, DIR + 2] = nx, ny, nz
+    R[c, t1], R[c, t1 + 1], R[c, t1 + 2] = 1.0 + sign * nx * nx * a, sign * b, -sign * nx
+    R[c, t2], R[c, t2 + 1], R[c, t2 + 2] = b, sign + ny * ny * a, -ny
 
 
 @njit(cache=True, inline="always")
@@ -74,11 +75,11 @@ def lever_arms(R, c, arm, turn, rx, ry, rz, iw, body, first, stop):
     """r × d_r and I_w⁻¹ (r × d_r) of one body (iw[body]: its I_w⁻¹, row-major),
     for the directions first..stop − 1."""
     for r in range(first, stop):
-        dx, dy, dz = R[c, DIR + 3 * r], R[c, DIR + 3 * r + 1], R[c, DIR + 3 * r + 2]
+        dx, dy, dz = R[c, DIR + STRIDE * r], R[c, DIR + STRIDE * r + 1], R[c, DIR + STRIDE * r + 2]
         cx, cy, cz = ry * dz - rz * dy, rz * dx - rx * dz, rx * dy - ry * dx
-        o = arm + 3 * r
+        o = arm + STRIDE * r
         R[c, o], R[c, o + 1], R[c, o + 2] = cx, cy, cz
-        o = turn + 3 * r
+        o = turn + STRIDE * r
         R[c, o] = iw[body, 0] * cx + iw[body, 1] * cy + iw[body, 2] * cz
         R[c, o + 1] = iw[body, 3] * cx + iw[body, 4] * cy + iw[body, 5] * cz
         R[c, o + 2] = iw[body, 6] * cx + iw[body, 7] * cy + iw[body, 8] * cz
@@ -87,13 +88,13 @@ def lever_arms(R, c, arm, turn, rx, ry, rz, iw, body, first, stop):
 @njit(cache=True, inline="always")
 def coupling(R, c, r, s):
     """W_rs = u_r's change per unit impulse along row s, summed over both bodies."""
-    dd = (R[c, DIR + 3 * r] * R[c, DIR + 3 * s] + R[c, DIR + 3 * r + 1] * R[c, DIR + 3 * s + 1]
-          + R[c, DIR + 3 * r + 2] * R[c, DIR + 3 * s + 2])
+    o, q = DIR + STRIDE * r, DIR + STRIDE * s
+    dd = R[c, o] * R[c, q] + R[c, o + 1] * R[c, q + 1] + R[c, o + 2] * R[c, q + 2]
     wa = 0.0
     wb = 0.0
     for i in range(3):
-        wa += R[c, ARM_A + 3 * r + i] * R[c, TURN_A + 3 * s + i]
-        wb += R[c, ARM_B + 3 * r + i] * R[c, TURN_B + 3 * s + i]
+        wa += R[c, ARM_A + STRIDE * r + i] * R[c, TURN_A + STRIDE * s + i]
+        wb += R[c, ARM_B + STRIDE * r + i] * R[c, TURN_B + STRIDE * s + i]
     return (R[c, INV_MASS_A] * dd + wa) + (R[c, INV_MASS_B] * dd + wb)
 
 
@@ -159,10 +160,11 @@ def in_manifold(a, b, c):
 @njit(cache=True, inline="always")
 def row_velocity(R, c, r, a, b, vel, omega):
     """u_r = d_r·(v_b − v_a) + (r_b × d_r)·ω_b − (r_a × d_r)·ω_a."""
+    o = STRIDE * r
     u = 0.0
     for i in range(3):
-        u += (R[c, DIR + 3 * r + i] * (vel[b, i] - vel[a, i])
-              + R[c, ARM_B + 3 * r + i] * omega[b, i] - R[c, ARM_A + 3 * r + i] * omega[a, i])
+        u += (R[c, DIR + o + i] * (vel[b, i] - vel[a, i])
+              + R[c, ARM_B + o + i] * omega[b, i] - R[c, ARM_A + o + i] * omega[a, i])
     return u
 
 

@@ -111,7 +111,7 @@ def quat_matrix(w, x, y, z):
             2 * (xz - wy), 2 * (yz + wx), 1 - 2 * (xx + yy))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def body_axes(w, x, y, z, out, row):
     """out[row + i] = body axis i in the world frame (column i of R(q))."""
     r = quat_matrix(w, x, y, z)

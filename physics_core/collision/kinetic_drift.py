@@ -18,7 +18,7 @@ Bounces and bodies the ccd stage moved back keep their own motion rule.
 """
 from numba import njit
 
-from .contact_layout import BODY_A, BODY_B, DIR, INV_MASS_A, INV_MASS_B, LAM, MU, SLIDING
+from .contact_layout import BODY_A, BODY_B, DIR, INV_MASS_A, INV_MASS_B, LAM, MU, SLIDING, STRIDE
 from .manifold_friction import COUNT, FIRST, IMA, IMB, L, M_LAM, M_MU_K, M_SLIDING
 from .scratch import take_rows
 
@@ -27,7 +27,7 @@ from .scratch import take_rows
 _ON_BOUND = 1.0 - 1e-9
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _add(out, a, b, ima, imb, fx, fy, fz):
     """Velocity change of an impulse f on b (−f on a), into out."""
     out[a, 0] -= ima * fx
@@ -38,20 +38,20 @@ def _add(out, a, b, ima, imb, fx, fy, fz):
     out[b, 2] += imb * fz
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _row(R, I, c, out):
     """A single-point contact's friction, if it slid at μ_k λ_n."""
     l1, l2 = R[c, LAM + 1], R[c, LAM + 2]
     lim = R[c, MU] * R[c, LAM]
     if I[c, SLIDING] == 0 or lim <= 0.0 or l1 * l1 + l2 * l2 < (lim * _ON_BOUND) ** 2:
         return
-    d = DIR + 3
+    d = DIR + STRIDE
     _add(out, I[c, BODY_A], I[c, BODY_B], R[c, INV_MASS_A], R[c, INV_MASS_B],
-         l1 * R[c, d] + l2 * R[c, d + 3], l1 * R[c, d + 1] + l2 * R[c, d + 4],
-         l1 * R[c, d + 2] + l2 * R[c, d + 5])
+         l1 * R[c, d] + l2 * R[c, d + STRIDE], l1 * R[c, d + 1] + l2 * R[c, d + STRIDE + 1],
+         l1 * R[c, d + 2] + l2 * R[c, d + STRIDE + 2])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _anchor(R, I, M, MI, k, out):
     """A manifold's anchor friction, if it slid at μ_k Σλ_n."""
     first, count = MI[k, FIRST], MI[k, COUNT]
@@ -63,8 +63,8 @@ def _anchor(R, I, M, MI, k, out):
     if MI[k, M_SLIDING] == 0 or lim <= 0.0 or l0 * l0 + l1 * l1 < (lim * _ON_BOUND) ** 2:
         return
     _add(out, I[first, BODY_A], I[first, BODY_B], M[k, IMA], M[k, IMB],
-         l0 * M[k, L] + l1 * M[k, L + 3], l0 * M[k, L + 1] + l1 * M[k, L + 4],
-         l0 * M[k, L + 2] + l1 * M[k, L + 5])
+         l0 * M[k, L] + l1 * M[k, L + STRIDE], l0 * M[k, L + 1] + l1 * M[k, L + STRIDE + 1],
+         l0 * M[k, L + 2] + l1 * M[k, L + STRIDE + 2])
 
 
 @njit(cache=True)

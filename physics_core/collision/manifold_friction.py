@@ -31,7 +31,7 @@ from numba import njit
 from .contact_build import start_separation, touch_shift
 from .kinetic_bound import kinetic_bound
 from .contact_layout import (ARM_A, ARM_B, BODY_A, BODY_B, DEPTH, DIR, INV_MASS_A, INV_MASS_B, LAM,
-                             MU_K, MU_S, SLIDING, TURN_A, TURN_B, U0)
+                             MU_K, MU_S, SLIDING, STRIDE, TURN_A, TURN_B, U0)
 from .pair_velocity import load_pair, pair_impulses, pair_velocity, store_pair
 from .scratch import take, take_int_rows, take_rows
 
@@ -40,7 +40,7 @@ from .scratch import take, take_int_rows, take_rows
 # columns (pair_velocity.py updates both tables); then W⁻¹ (3×3), μ_s, μ_k,
 # r̄, λ (3)
 L, AA, AB, TA, TB, IMA, IMB = DIR, ARM_A, ARM_B, TURN_A, TURN_B, INV_MASS_A, INV_MASS_B
-W_INV, M_MU_S, M_MU_K, RADIUS, M_LAM, MCOL = 47, 56, 57, 58, 59, 62
+W_INV, M_MU_S, M_MU_K, RADIUS, M_LAM, MCOL = 53, 62, 63, 64, 65, 68
 # int columns: first row, number of rows, sliding (kinetic friction this substep)
 FIRST, COUNT, M_SLIDING, MICOL = 0, 1, 2, 3
 _TINY = 1e-300
@@ -102,14 +102,14 @@ def _body_parts(M, k, ang, turn, normal, rx, ry, rz, iw, body):
     """Angular parts of one body for the three rows: r × t1, r × t2, n
     (iw[body]: its I_w⁻¹, row-major)."""
     for r in range(3):
-        dx, dy, dz = M[k, L + 3 * r], M[k, L + 3 * r + 1], M[k, L + 3 * r + 2]
+        dx, dy, dz = M[k, L + STRIDE * r], M[k, L + STRIDE * r + 1], M[k, L + STRIDE * r + 2]
         if r == 2:
             cx, cy, cz = normal[0], normal[1], normal[2]
         else:
             cx, cy, cz = ry * dz - rz * dy, rz * dx - rx * dz, rx * dy - ry * dx
-        o = ang + 3 * r
+        o = ang + STRIDE * r
         M[k, o], M[k, o + 1], M[k, o + 2] = cx, cy, cz
-        o = turn + 3 * r
+        o = turn + STRIDE * r
         for i in range(3):
             M[k, o + i] = iw[body, 3 * i] * cx + iw[body, 3 * i + 1] * cy + iw[body, 3 * i + 2] * cz
 
@@ -120,9 +120,9 @@ def _coupling(M, k, r, s):
     wa = 0.0
     wb = 0.0
     for i in range(3):
-        ll += M[k, L + 3 * r + i] * M[k, L + 3 * s + i]
-        wa += M[k, AA + 3 * r + i] * M[k, TA + 3 * s + i]
-        wb += M[k, AB + 3 * r + i] * M[k, TB + 3 * s + i]
+        ll += M[k, L + STRIDE * r + i] * M[k, L + STRIDE * s + i]
+        wa += M[k, AA + STRIDE * r + i] * M[k, TA + STRIDE * s + i]
+        wb += M[k, AB + STRIDE * r + i] * M[k, TB + STRIDE * s + i]
     return (M[k, IMA] + M[k, IMB]) * ll + wa + wb
 
 
@@ -161,8 +161,9 @@ def anchor_rows(R, I, point, pos, iw, toi, h, store):
         a, b = I[first, BODY_A], I[first, BODY_B]
         cx, cy, cz, rbar = _centre(point, first, count)
         s = _shift(R, I, first, count, toi, h)
-        for i in range(9):
-            M[k, L + i] = R[first, DIR + 3 + i] if i < 6 else 0.0
+        for r in range(3):          # the anchor's t1, t2: the rows'; its twist has no linear part
+            for i in range(3):
+                M[k, L + STRIDE * r + i] = R[first, DIR + STRIDE * (r + 1) + i] if r < 2 else 0.0
         for i in range(3):
             n[i] = R[first, DIR + i]
         M[k, IMA], M[k, IMB] = R[first, INV_MASS_A], R[first, INV_MASS_B]
@@ -185,8 +186,9 @@ def _take_row_friction(R, M, k, first, count):
         for r in range(2):
             lam = 0.0
             for i in range(3):
-                f = R[c, LAM + 1] * R[c, DIR + 3 + i] + R[c, LAM + 2] * R[c, DIR + 6 + i]
-                lam += f * M[k, L + 3 * r + i]
+                f = (R[c, LAM + 1] * R[c, DIR + STRIDE + i]
+                     + R[c, LAM + 2] * R[c, DIR + 2 * STRIDE + i])
+                lam += f * M[k, L + STRIDE * r + i]
             M[k, M_LAM + r] += lam
         R[c, LAM + 1] = 0.0
         R[c, LAM + 2] = 0.0
@@ -265,4 +267,4 @@ def anchor_friction_out(R, M, MI, friction):
         for c in range(first, first + count):
             for i in range(3):
                 friction[c, i] = (M[k, M_LAM] * M[k, L + i]
-                                  + M[k, M_LAM + 1] * M[k, L + 3 + i]) / count
+                                  + M[k, M_LAM + 1] * M[k, L + STRIDE + i]) / count

@@ -25,7 +25,7 @@ manifold anchors' table (manifold_friction.py) shares.
 """
 from numba import njit
 
-from .contact_layout import ARM_A, ARM_B, DIR, INV_MASS_A, INV_MASS_B, TURN_A, TURN_B
+from .contact_layout import ARM_A, ARM_B, DIR, INV_MASS_A, INV_MASS_B, STRIDE, TURN_A, TURN_B
 
 
 @njit(cache=True, inline="always")
@@ -47,7 +47,7 @@ def store_pair(vel, omega, a, b, p):
 def pair_velocity(T, k, r, p):
     """u_r = d_r·(v_b − v_a) + (r_b × d_r)·ω_b − (r_a × d_r)·ω_a of row r of
     entry k (contact_build.row_velocity on the pair)."""
-    o = 3 * r
+    o = STRIDE * r
     u = 0.0
     u += T[k, DIR + o] * (p[6] - p[0]) + T[k, ARM_B + o] * p[9] - T[k, ARM_A + o] * p[3]
     u += (T[k, DIR + o + 1] * (p[7] - p[1]) + T[k, ARM_B + o + 1] * p[10]
@@ -61,7 +61,7 @@ def pair_velocity(T, k, r, p):
 def pair_impulse(T, k, r, lam, p):
     """The pair after an impulse lam along row r of entry k
     (sequential_impulses.apply_impulse on the pair)."""
-    o = 3 * r
+    o = STRIDE * r
     ima, imb = T[k, INV_MASS_A] * lam, T[k, INV_MASS_B] * lam
     d0, d1, d2 = T[k, DIR + o], T[k, DIR + o + 1], T[k, DIR + o + 2]
     return (p[0] - ima * d0, p[1] - ima * d1, p[2] - ima * d2,
@@ -79,14 +79,14 @@ def pair_impulses(T, k, l0, l1, l2, p):
     Σ λ_r I_w⁻¹ (r × d_r). Written out: a helper returning each sum as a
     tuple, inlined, made a sweep 8 % slower."""
     ima, imb = T[k, INV_MASS_A], T[k, INV_MASS_B]
-    P0 = l0 * T[k, DIR] + l1 * T[k, DIR + 3] + l2 * T[k, DIR + 6]
-    P1 = l0 * T[k, DIR + 1] + l1 * T[k, DIR + 4] + l2 * T[k, DIR + 7]
-    P2 = l0 * T[k, DIR + 2] + l1 * T[k, DIR + 5] + l2 * T[k, DIR + 8]
-    A0 = l0 * T[k, TURN_A] + l1 * T[k, TURN_A + 3] + l2 * T[k, TURN_A + 6]
-    A1 = l0 * T[k, TURN_A + 1] + l1 * T[k, TURN_A + 4] + l2 * T[k, TURN_A + 7]
-    A2 = l0 * T[k, TURN_A + 2] + l1 * T[k, TURN_A + 5] + l2 * T[k, TURN_A + 8]
-    B0 = l0 * T[k, TURN_B] + l1 * T[k, TURN_B + 3] + l2 * T[k, TURN_B + 6]
-    B1 = l0 * T[k, TURN_B + 1] + l1 * T[k, TURN_B + 4] + l2 * T[k, TURN_B + 7]
-    B2 = l0 * T[k, TURN_B + 2] + l1 * T[k, TURN_B + 5] + l2 * T[k, TURN_B + 8]
+    P0 = l0 * T[k, DIR] + l1 * T[k, DIR + STRIDE] + l2 * T[k, DIR + 2 * STRIDE]
+    P1 = l0 * T[k, DIR + 1] + l1 * T[k, DIR + STRIDE + 1] + l2 * T[k, DIR + 2 * STRIDE + 1]
+    P2 = l0 * T[k, DIR + 2] + l1 * T[k, DIR + STRIDE + 2] + l2 * T[k, DIR + 2 * STRIDE + 2]
+    A0 = l0 * T[k, TURN_A] + l1 * T[k, TURN_A + STRIDE] + l2 * T[k, TURN_A + 2 * STRIDE]
+    A1 = l0 * T[k, TURN_A + 1] + l1 * T[k, TURN_A + STRIDE + 1] + l2 * T[k, TURN_A + 2 * STRIDE + 1]
+    A2 = l0 * T[k, TURN_A + 2] + l1 * T[k, TURN_A + STRIDE + 2] + l2 * T[k, TURN_A + 2 * STRIDE + 2]
+    B0 = l0 * T[k, TURN_B] + l1 * T[k, TURN_B + STRIDE] + l2 * T[k, TURN_B + 2 * STRIDE]
+    B1 = l0 * T[k, TURN_B + 1] + l1 * T[k, TURN_B + STRIDE + 1] + l2 * T[k, TURN_B + 2 * STRIDE + 1]
+    B2 = l0 * T[k, TURN_B + 2] + l1 * T[k, TURN_B + STRIDE + 2] + l2 * T[k, TURN_B + 2 * STRIDE + 2]
     return (p[0] - ima * P0, p[1] - ima * P1, p[2] - ima * P2, p[3] - A0, p[4] - A1, p[5] - A2,
             p[6] + imb * P0, p[7] + imb * P1, p[8] + imb * P2, p[9] + B0, p[10] + B1, p[11] + B2)

@@ -35,7 +35,7 @@ from numba import njit
 
 from ..quaternion import rotate_inverse_one, rotate_one, row4
 from .contact_build import row_velocity
-from .contact_layout import ARM_A, ARM_B, BIAS, BODY_A, BODY_B, DIR, LAM
+from .contact_layout import ARM_A, ARM_B, BIAS, BODY_A, BODY_B, DIR, LAM, STRIDE
 from .manifold_friction import AA, AB, COUNT, FIRST, L, M_LAM, M_MU_S, M_SLIDING, RADIUS
 from .pair_velocity import load_pair, pair_impulse, store_pair
 
@@ -69,8 +69,8 @@ def _manifold_rows(R, I, M, MI, m, vel, omega, upper_is_b, ws, j):
         j += 1
     for r in range(3):
         for i in range(3):
-            ws[j, i] = sign * M[m, L + 3 * r + i]
-            ws[j, 3 + i] = sign * M[m, anchor_arm + 3 * r + i]
+            ws[j, i] = sign * M[m, L + STRIDE * r + i]
+            ws[j, 3 + i] = sign * M[m, anchor_arm + STRIDE * r + i]
         ws[VEC, j] = -row_velocity(M, m, r, a, b, vel, omega)    # the rows' layout
         j += 1
     return j

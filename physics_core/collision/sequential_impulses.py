@@ -29,7 +29,7 @@ from .kinetic_bound import kinetic_bound
 from .manifold_friction import COUNT, FIRST, M_SLIDING, update_anchor
 from .pair_velocity import load_pair, pair_impulse, pair_impulses, pair_velocity, store_pair
 from .contact_layout import (BIAS, BODY_A, BODY_B, DIR, G_TN, INV_MASS_A, INV_MASS_B, LAM, MASS_N,
-                             MU, SLIDING, TURN_A, TURN_B, W_TT_INV)
+                             MU, SLIDING, STRIDE, TURN_A, TURN_B, W_TT_INV)
 
 _TINY = 1e-300
 
@@ -39,11 +39,11 @@ def apply_impulse(R, c, r, lam, a, b, vel, omega):
     """Velocity change of both bodies for an impulse lam along row r."""
     ima, imb = R[c, INV_MASS_A] * lam, R[c, INV_MASS_B] * lam
     for i in range(3):
-        d = R[c, DIR + 3 * r + i]
+        d = R[c, DIR + STRIDE * r + i]
         vel[a, i] -= ima * d
-        omega[a, i] -= lam * R[c, TURN_A + 3 * r + i]
+        omega[a, i] -= lam * R[c, TURN_A + STRIDE * r + i]
         vel[b, i] += imb * d
-        omega[b, i] += lam * R[c, TURN_B + 3 * r + i]
+        omega[b, i] += lam * R[c, TURN_B + STRIDE * r + i]
 
 
 @njit(cache=True)
@@ -253,7 +253,8 @@ def _settling(change, before, settle, left):
 def _friction_row(R, c, friction):
     """Contact c's tangential impulse as a world vector λ_t1 t1 + λ_t2 t2."""
     for i in range(3):
-        friction[c, i] = R[c, LAM + 1] * R[c, DIR + 3 + i] + R[c, LAM + 2] * R[c, DIR + 6 + i]
+        friction[c, i] = (R[c, LAM + 1] * R[c, DIR + STRIDE + i]
+                          + R[c, LAM + 2] * R[c, DIR + 2 * STRIDE + i])
 
 
 @njit(cache=True, inline="always")

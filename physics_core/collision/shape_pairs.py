@@ -31,7 +31,7 @@ POINT, NORMAL_COL, DEPTH, SLOT = 0, 3, 6, 7
 ROW = 8
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def put_row(rows, k, slot, px, py, pz, nx, ny, nz, depth):
     """Row k: point, normal, depth, slot."""
     rows[k, POINT], rows[k, POINT + 1], rows[k, POINT + 2] = px, py, pz
@@ -55,7 +55,7 @@ def sphere_sphere_row(ra, rb, fx, fy, fz, sx, sy, sz):
             0.5 * ((fz + nz * ra) + (sz - nz * rb)), nx, ny, nz, ra + rb - dist)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def sphere_sphere(f, s, dims, pos, quat, margin, ws, rows, k):
     px, py, pz, nx, ny, nz, d = sphere_sphere_row(dims[f, RADIUS], dims[s, RADIUS], pos[f, 0], pos[f, 1],
                                                   pos[f, 2], pos[s, 0], pos[s, 1], pos[s, 2])
@@ -72,7 +72,7 @@ def plane_sphere_row(n0, n1, n2, offset, r, cx, cy, cz):
     return cx - n0 * back, cy - n1 * back, cz - n2 * back, n0, n1, n2, r - h
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def plane_sphere(f, s, dims, pos, quat, margin, ws, rows, k):
     px, py, pz, nx, ny, nz, d = plane_sphere_row(dims[f, NORMAL], dims[f, NORMAL + 1], dims[f, NORMAL + 2],
                                                  dims[f, OFFSET], dims[s, RADIUS], pos[s, 0], pos[s, 1], pos[s, 2])
@@ -132,7 +132,7 @@ def box_sphere_row(h0, h1, h2, fx, fy, fz, w, x, y, z, r, sx, sy, sz):
             nx, ny, nz, depth)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def box_sphere(f, s, dims, pos, quat, margin, ws, rows, k):
     px, py, pz, nx, ny, nz, d = box_sphere_row(
         dims[f, HALF], dims[f, HALF + 1], dims[f, HALF + 2], pos[f, 0], pos[f, 1], pos[f, 2],
@@ -141,7 +141,7 @@ def box_sphere(f, s, dims, pos, quat, margin, ws, rows, k):
     return 1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def box_vertex(R, px, py, pz, h0, h1, h2, v):
     """World vertex v of a box at p (bit k of v set: + side along body axis k),
     x_i = p_i + Σ_j R_ij s_j h_j (narrowphase.box_vertices' einsum order)."""
@@ -152,7 +152,7 @@ def box_vertex(R, px, py, pz, h0, h1, h2, v):
             pz + dot_lanes(R[6], R[7], R[8], l0, l1, l2))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def deepest_vertices(heights, row, margin):
     """The up to BOX_PLANE_POINTS vertices v of greatest depth -heights[row, v]
     with depth > -margin, ties to the lower vertex (narrowphase's stable
@@ -168,7 +168,7 @@ def deepest_vertices(heights, row, margin):
     return picked
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def plane_box(f, s, dims, pos, quat, margin, ws, rows, k):
     """Box vertices less than `margin` above the plane, the deepest
     BOX_PLANE_POINTS of them; slot = vertex number, rows in slot order.

@@ -50,7 +50,7 @@ from numba import njit
 from ..quaternion import rotate_inverse_one, row4
 from .contact_build import effective_masses, normal_mass
 from .contact_layout import (ARM_A, ARM_B, BODY_A, BODY_B, INV_MASS_A, INV_MASS_B, LAM, MASS_N,
-                             TURN_A, TURN_B)
+                             STRIDE, TURN_A, TURN_B)
 from .manifold_friction import COUNT, FIRST, IMA, IMB, M_LAM, TA, TB, _invert
 from .resting_block import MANIFOLDS, WS_SHAPE, settle_resting
 from .scratch import cursor, rewind, take, take_bools, take_int_rows, take_ints, take_rows
@@ -222,9 +222,10 @@ def _held(T, k, inv_mass, turn):
     freezing it again would change no number of the entry."""
     if not _plus_zero(T[k, inv_mass]):
         return False
-    for i in range(9):
-        if not _plus_zero(T[k, turn + i]):
-            return False
+    for r in range(3):
+        for i in range(3):
+            if not _plus_zero(T[k, turn + STRIDE * r + i]):
+                return False
     return True
 
 
@@ -235,8 +236,9 @@ def _make_immovable(T, k, inv_mass, turn):
     if _held(T, k, inv_mass, turn):
         return
     T[k, inv_mass] = 0.0
-    for i in range(9):
-        T[k, turn + i] = 0.0
+    for r in range(3):
+        for i in range(3):
+            T[k, turn + STRIDE * r + i] = 0.0
 
 
 @njit(cache=True, inline="always")
@@ -377,7 +379,7 @@ def _lever(R, first, count):
     root, of the largest |r × d|² (a correctly rounded root keeps the order)."""
     lever2 = 0.0
     for c in range(first, first + count):
-        for o in range(0, 9, 3):
+        for o in range(0, 3 * STRIDE, STRIDE):
             for arm in (ARM_A + o, ARM_B + o):
                 lever2 = max(lever2, R[c, arm] ** 2 + R[c, arm + 1] ** 2 + R[c, arm + 2] ** 2)
     return math.sqrt(lever2)

@@ -22,10 +22,10 @@ from numba import njit
 
 from .contact_build import row_velocity
 from .contact_data import WARM_COLS, WARM_FRICTION, WARM_NORMAL, WARM_SLIP
-from .contact_layout import BODY_A, BODY_B, DIR, LAM, MU, MU_K, MU_S, SLIDING
+from .contact_layout import BODY_A, BODY_B, DIR, LAM, MU, MU_K, MU_S, SLIDING, STRIDE
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def start_slip(R, I, c, vel0, omega0):
     """|u_t| of row c at the start-of-substep velocities vel0, omega0."""
     a, b = I[c, BODY_A], I[c, BODY_B]
@@ -52,8 +52,9 @@ def load_warm(R, I, key, old_key, old, fraction, static_speed, vel0, omega0):
             if fraction > 0.0:
                 f0, f1, f2 = old[j, WARM_FRICTION], old[j, WARM_FRICTION + 1], old[j, WARM_FRICTION + 2]
                 R[c, LAM] = old[j, WARM_NORMAL] * fraction
-                R[c, LAM + 1] = (f0 * R[c, DIR + 3] + f1 * R[c, DIR + 4] + f2 * R[c, DIR + 5]) * fraction
-                R[c, LAM + 2] = (f0 * R[c, DIR + 6] + f1 * R[c, DIR + 7] + f2 * R[c, DIR + 8]) * fraction
+                t1, t2 = DIR + STRIDE, DIR + 2 * STRIDE
+                R[c, LAM + 1] = (f0 * R[c, t1] + f1 * R[c, t1 + 1] + f2 * R[c, t1 + 2]) * fraction
+                R[c, LAM + 2] = (f0 * R[c, t2] + f1 * R[c, t2 + 1] + f2 * R[c, t2 + 2]) * fraction
         if slip != slip:                   # a new contact
             slip = start_slip(R, I, c, vel0, omega0)
         sliding = slip > static_speed
