@@ -309,3 +309,25 @@ def test_two_calls_give_the_same_bits():
         assert np.array_equal(getattr(first, f), getattr(second, f)), f
         assert np.array_equal(getattr(first, f), getattr(fresh, f)), f
         assert getattr(first, f) is not getattr(second, f), "each call owns its arrays"
+
+
+@settings(max_examples=150, deadline=None)
+@given(solids=st.lists(bodies, min_size=2, max_size=16), flat=planes,
+       margin=st.sampled_from([0.0, 0.001]))
+def test_a_workspace_full_of_nan_gives_the_same_rows_as_a_zeroed_one(solids, flat, margin):
+    """The step's detection leaves the box pairs' workspace as its scratch
+    holds it (detection.detect_scratch): every kernel must write a workspace
+    entry before it reads it. Filled with NaN, any entry read first would
+    show in the rows."""
+    from physics_core.collision.box_pair import workspace
+    from physics_core.collision.detection import fill_rows
+    model = model_of(scene_bodies(solids, flat))
+    g = Geometry.from_model(model)
+    pos, quat = np.array(model.initial["pos"]), np.array(model.initial["quat"])
+    pairs = candidate_pairs(g.kind, g.dims, g.is_static, g.reach, pos, quat, margin)
+    out = []
+    for ws in (workspace(), np.full_like(workspace(), np.nan)):
+        rows, _, k = fill_rows(pairs, g.kind, g.dims, pos, quat, margin, ws,
+                               np.empty((4 * len(pairs) + 4, 8)), np.empty(4 * len(pairs) + 4, np.int64))
+        out.append(rows[:k].tobytes())
+    assert out[0] == out[1]

@@ -167,7 +167,8 @@ def solve_stage(fp, ip, R, I, M, MI, key, vel, omega, warm, J, masses, store):
     left_out = SETTLE * limit
     shock = ip[SHOCK_ON] and holds_something(R)
     stops = (limit, left_out, STALL) if shock else (limit, limit, math.inf)
-    sweeps, _ = solve_velocities(R, I, M, MI, vel, omega, ip[ITERATIONS], stops, changes)
+    sweeps, _ = solve_velocities(R, I, M, MI, vel, omega, ip[ITERATIONS], stops, changes,
+                                 take(store, len(R)))
     friction, slip = take_rows(store, len(R), 3), take(store, len(R))
     friction_and_slip(R, I, vel, omega, friction, slip)
     anchor_friction_out(R, M, MI, friction)

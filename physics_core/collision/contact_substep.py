@@ -116,8 +116,8 @@ def run(cm, fp, ip, s, masses, start, sleep, warm, events, h, dt, first, last, c
     if first:
         events_reset(events)
     if ip[CCD_ON]:
-        ccd_stage(cm, fp, ip, pos, quat, omega, awake, start[0], start[1], toi, store)
-        ok = _finite(pos, quat, vel, omega)
+        moved = ccd_stage(cm, fp, ip, pos, quat, omega, awake, start[0], start[1], toi, store)
+        ok = moved == 0 or _finite(pos, quat, vel, omega)      # no body moved back: nothing new
         t = lap(prof, CCD, t)
         if not ok:
             return CCD

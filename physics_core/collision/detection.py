@@ -99,7 +99,8 @@ def narrow_rows(pairs, kind, dims, pos, quat, margin, cap):
 
 @njit(cache=True)
 def fill_rows(pairs, kind, dims, pos, quat, margin, ws, rows, row_pair):
-    """narrow_rows into the given buffers (ws zeroed). The buffers grow between
+    """narrow_rows into the given buffers (ws: any contents; every kernel writes
+    a workspace entry before it reads it). The buffers grow between
     chunks of pairs that surely fit, never inside the loop over pairs: a numba
     array variable reassigned in a loop costs reference-count updates on every
     iteration (about 3× a sphere pair)."""
@@ -203,8 +204,10 @@ def detect_scratch(kind, dims, is_static, reach, pos, quat, margin, cap, store):
         return _scratch_contacts(store, 0), -1
     pairs = scratch_pairs(kind, dims, is_static, reach, pos, quat, margin, store)
     rows = take_rows(store, max(cap, 16), ROW)
+    # left as the scratch holds it: a box pair writes every workspace entry it
+    # reads (tests/test_detection_kernels.py fills it with NaN), and zeroing
+    # its 528 numbers was about 2 % of a one-sphere step
     ws = take_rows(store, WS_ROWS, 8)
-    ws[:] = 0.0
     found = fill_rows(pairs, kind, dims, pos, quat, margin, ws, rows,
                       take_ints(store, len(rows)))
     rows, row_pair, k = borrow(found)

@@ -201,7 +201,7 @@ def sweep_manifolds(R, I, M, MI, vel, omega, changes, shares):
 
 
 @njit(cache=True)
-def solve_velocities(R, I, M, MI, vel, omega, iterations, stops, changes):
+def solve_velocities(R, I, M, MI, vel, omega, iterations, stops, changes, shares=None):
     """At most `iterations` sweeps over every manifold; stops after a sweep
     that changed no impulse by more than `limit` (N·s; < 0: never), stops =
     (limit, settle, stall), unless the sweeps converge fast enough to reach
@@ -221,9 +221,12 @@ def solve_velocities(R, I, M, MI, vel, omega, iterations, stops, changes):
     follows, which settles what they leave. A NaN change never stops early.
     Returns (sweeps done, the last sweep's largest impulse change; NaN if
     one was); changes[k] is manifold k's largest change in that last
-    sweep."""
+    sweep. shares: scratch of len(R) for face_shares (None: a new array; the
+    step passes a view of its substep's scratch)."""
     limit, settle, stall = stops
-    shares = face_shares(R, MI, np.empty(len(R)))
+    if shares is None:
+        shares = np.empty(len(R))
+    face_shares(R, MI, shares)
     change = previous = math.inf
     changes[:] = math.inf
     for sweep in range(iterations):
