@@ -33,9 +33,8 @@ import math
 
 from numba import njit
 
-from .contact_build import row_velocity
-from .contact_layout import (BODY_A, BODY_B, DEPTH, DIR, E, LAM, MU_K, MU_S, STRIDE, U0,
-                             W_TT_INV)
+from .contact_build import row_velocity, tangent_world
+from .contact_layout import BODY_A, BODY_B, DEPTH, E, LAM, MU_K, MU_S, U0, W_TT_INV
 from .sequential_impulses import apply_impulse
 
 WHEN, SHIFT, AFTER = range(3)      # columns of impact_terms' table
@@ -137,5 +136,4 @@ def add_bounces(R, J, friction):
         for r in range(3):
             R[c, LAM + r] += J[c, r]
         for i in range(3):
-            friction[c, i] += (J[c, 1] * R[c, DIR + STRIDE + i]
-                               + J[c, 2] * R[c, DIR + 2 * STRIDE + i])
+            friction[c, i] += tangent_world(R, c, J[c, 1], J[c, 2], i)

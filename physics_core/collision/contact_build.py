@@ -158,6 +158,13 @@ def in_manifold(a, b, c):
 
 
 @njit(cache=True, inline="always")
+def tangent_world(R, c, l1, l2, i):
+    """Component i of l1 t1 + l2 t2, contact c's tangential impulses l1, l2
+    as a world vector."""
+    return l1 * R[c, DIR + STRIDE + i] + l2 * R[c, DIR + 2 * STRIDE + i]
+
+
+@njit(cache=True, inline="always")
 def row_velocity(R, c, r, a, b, vel, omega):
     """u_r = d_r·(v_b − v_a) + (r_b × d_r)·ω_b − (r_a × d_r)·ω_a."""
     o = STRIDE * r

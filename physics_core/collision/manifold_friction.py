@@ -28,7 +28,7 @@ import math
 
 from numba import njit
 
-from .contact_build import start_separation, touch_shift
+from .contact_build import start_separation, tangent_world, touch_shift
 from .kinetic_bound import kinetic_bound
 from .contact_layout import (ARM_A, ARM_B, BODY_A, BODY_B, DEPTH, DIR, INV_MASS_A, INV_MASS_B, LAM,
                              MU_K, MU_S, SLIDING, STRIDE, TURN_A, TURN_B, U0)
@@ -186,8 +186,7 @@ def _take_row_friction(R, M, k, first, count):
         for r in range(2):
             lam = 0.0
             for i in range(3):
-                f = (R[c, LAM + 1] * R[c, DIR + STRIDE + i]
-                     + R[c, LAM + 2] * R[c, DIR + 2 * STRIDE + i])
+                f = tangent_world(R, c, R[c, LAM + 1], R[c, LAM + 2], i)
                 lam += f * M[k, L + STRIDE * r + i]
             M[k, M_LAM + r] += lam
         R[c, LAM + 1] = 0.0

@@ -24,7 +24,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .contact_build import row_velocity
+from .contact_build import row_velocity, tangent_world
 from .kinetic_bound import kinetic_bound
 from .manifold_friction import COUNT, FIRST, M_SLIDING, update_anchor
 from .pair_velocity import load_pair, pair_impulse, pair_impulses, pair_velocity, store_pair
@@ -256,8 +256,7 @@ def _settling(change, before, settle, left):
 def _friction_row(R, c, friction):
     """Contact c's tangential impulse as a world vector λ_t1 t1 + λ_t2 t2."""
     for i in range(3):
-        friction[c, i] = (R[c, LAM + 1] * R[c, DIR + STRIDE + i]
-                          + R[c, LAM + 2] * R[c, DIR + 2 * STRIDE + i])
+        friction[c, i] = tangent_world(R, c, R[c, LAM + 1], R[c, LAM + 2], i)
 
 
 @njit(cache=True, inline="always")
