@@ -120,7 +120,7 @@ MUTATIONS = (
              (T + "test_collisions_friction.py",)),
     Mutation("the shock sweep keeps a layer that gained energy", "solve", C + "shock_propagation.py",
              "GAIN = 1e-4", "GAIN = 1e9",
-             (T + "test_stacks_and_mass_ratios.py",)),
+             (T + "test_shock_energy_guard.py", T + "test_stacks_and_mass_ratios.py")),
     Mutation("the resting solve lets a point pull", "solve", C + "resting_block.py",
              "if not lam >= 0.0:", "if not lam >= -1e9:",
              (T + "test_resting_block.py",)),
