@@ -5,7 +5,10 @@ of the solve's later passes)."""
 import numpy as np
 
 from physics_core.collision import contact_stages as CS
+from physics_core.collision.contact_data import ITERATIONS, VELOCITY_TOLERANCE
 from physics_core.collision.scratch import new_counts
+from physics_core.collision.sequential_impulses import least_mass, solve_velocities
+from physics_core.collision.shock_propagation import STALL
 
 
 def rows_before_pass(w, dt, g=0.0):
@@ -45,3 +48,18 @@ def rows_before_solve(w, dt, g=9.81):
     dt, the collision pass applied: what the sweeps start from."""
     (R, I, M, MI), vel, omega, quat, store, _ = pass_applied(w, dt, g)
     return R, I, M, MI, vel, omega, quat, store
+
+
+def rows_after_sweeps(w, dt, g=9.81):
+    """(R, I, M, MI, vel, omega, quat, store, changes, bound) of w's next
+    substep of length dt: the rows solved by the sequential-impulse sweeps
+    as solve_stage runs them before the shock sweep; changes: each
+    manifold's change in the last sweep, bound: the shock sweep's leave-out
+    bound (a group whose changes are all below it is left out)."""
+    R, I, M, MI, vel, omega, quat, store = rows_before_solve(w, dt, g)
+    cs = w.contact_system
+    limit = cs.fp[VELOCITY_TOLERANCE] * least_mass(R)
+    changes = np.empty(len(MI))
+    solve_velocities(R, I, M, MI, vel, omega, cs.ip[ITERATIONS], (limit, CS.SETTLE * limit, STALL),
+                     changes)
+    return R, I, M, MI, vel, omega, quat, store, changes, CS.SETTLE * limit

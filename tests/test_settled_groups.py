@@ -23,7 +23,7 @@ from physics_core.collision.manifold_friction import FIRST, MICOL
 from physics_core.collision.scratch import empty_store
 from physics_core.collision.sequential_impulses import (friction_and_slip, friction_of,
                                                         least_mass, solve_velocities)
-from substep_rows import rows_before_solve
+from substep_rows import rows_after_sweeps, rows_before_solve
 
 DT = 1 / 240
 
@@ -96,13 +96,7 @@ def _swept(extra, steps):
                                _cube("lone", 1.0, 0.1), _cube("light", 0.0, 0.1),
                                _cube("heavy", 0.0, 0.3, mass=1000.0)] + extra})
     w.step(steps)
-    R, I, M, MI, vel, omega, quat, store = rows_before_solve(w, DT)
-    cs = w.contact_system
-    limit = cs.fp[VELOCITY_TOLERANCE] * least_mass(R)
-    changes = np.empty(len(MI))
-    solve_velocities(R, I, M, MI, vel, omega, cs.ip[ITERATIONS], (limit, SETTLE * limit, SP.STALL),
-                     changes)
-    return w, R, I, M, MI, vel, omega, quat, store, changes, SETTLE * limit
+    return (w,) + rows_after_sweeps(w, DT)
 
 
 def test_a_settled_cube_is_left_out_beside_an_unsettled_stack():

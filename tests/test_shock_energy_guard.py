@@ -16,13 +16,11 @@ import pytest
 
 from physics_core import load_scene
 from physics_core.collision import shock_propagation as SP
-from physics_core.collision.contact_data import (ITERATIONS, RESTING_BLOCK, SHOCK_ON,
-                                                 VELOCITY_TOLERANCE)
+from physics_core.collision.contact_data import RESTING_BLOCK, SHOCK_ON, VELOCITY_TOLERANCE
 from physics_core.collision.contact_layout import BODY_A, BODY_B, LAM
 from physics_core.collision.contact_stages import SETTLE
 from physics_core.collision.manifold_friction import COUNT, FIRST, M_LAM
-from physics_core.collision.sequential_impulses import least_mass, solve_velocities
-from substep_rows import rows_before_solve
+from substep_rows import rows_after_sweeps
 
 DT = 1 / 240
 
@@ -40,15 +38,10 @@ def _sliding_apart(speed):
                     "bodies": [{"name": "floor", "shape": {"type": "plane"}, "static": True},
                                _box("left", -speed, -0.11, 0.1), _box("right", speed, 0.11, 0.1),
                                _box("top", 0.0, 0.0, 0.3)]})
-    R, I, M, MI, vel, omega, quat, store = rows_before_solve(w, DT)
-    cs = w.contact_system
-    limit = cs.fp[VELOCITY_TOLERANCE] * least_mass(R)
-    changes = np.empty(len(MI))
-    solve_velocities(R, I, M, MI, vel, omega, cs.ip[ITERATIONS], (limit, SETTLE * limit, SP.STALL),
-                     changes)
+    R, I, M, MI, vel, omega, quat, store, changes, bound = rows_after_sweeps(w, DT)
     masses = (w._inv_mass, w.inv_inertia, quat)
-    return (w, (R, I, M, MI), vel, omega, masses, store, SETTLE * cs.fp[VELOCITY_TOLERANCE],
-            (changes, SETTLE * limit))
+    return (w, (R, I, M, MI), vel, omega, masses, store,
+            SETTLE * w.contact_system.fp[VELOCITY_TOLERANCE], (changes, bound))
 
 
 def _energy(body, vel, omega, masses):
