@@ -88,7 +88,7 @@ def bounce_friction(R, c, a, b, jn, vel, omega):
     return s1, s2
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def impact_terms(R, I, vel_start, omega_start, h, w, onset):
     """onset[c] = (τ, shift, after) of contact c's first bounce, the same
     for every sweep of the pass: its impact happens at τ (`impact`), and the
@@ -128,7 +128,7 @@ def bounce_goal(R, c, threshold, ramp, h, u_now, onset, target, J):
     return e * approach + after - shift, e * approach, when
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def add_bounces(R, J, friction):
     """The pass's impulses into the rows' λ and the friction vectors (after
     the warm cache took the solve's own)."""

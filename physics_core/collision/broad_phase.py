@@ -30,7 +30,7 @@ def candidate_pairs(kind, dims, is_static, reach, pos, quat, margin):
     return sort_pairs(found[0], found[1], len(kind))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def find_pairs(kind, dims, is_static, reach, pos, quat, margin, solid, planes, bodies, gaps, pairs,
                store):
     """(pairs, k): the unsorted candidate pairs in `pairs` (grown if short, a

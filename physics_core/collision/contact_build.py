@@ -40,7 +40,7 @@ def world_inverse_inertia(q, inv_inertia, out, row):
                                    + R[i][2] * inv_inertia[2] * R[j][2])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def inertia_table(a, b, quat, inv_inertia, store):
     """(n, 9) I_w⁻¹ of every body in a contact (a[c] or b[c]), each computed
     once however many contacts it has; the other rows are not set. In the

@@ -68,7 +68,7 @@ def ccd_stage(cm, fp, ip, pos, quat, omega, awake, p0, q0, toi, store):
                               fp[CCD_TOLERANCE], toi, take_bools(store, len(pos)))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def kept_rows(moving, a, b, keep):
     """Indices of the contacts with a moving body (a static–sleeping pair
     rests), written into `keep` (at least len(a) long)."""

@@ -97,7 +97,7 @@ def narrow_rows(pairs, kind, dims, pos, quat, margin, cap):
                      np.empty(len(rows), np.int64))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def fill_rows(pairs, kind, dims, pos, quat, margin, ws, rows, row_pair):
     """narrow_rows into the given buffers (ws: any contents; every kernel writes
     a workspace entry before it reads it). The buffers grow between
@@ -141,7 +141,7 @@ def chunk_rows(pairs, start, stop, kind, dims, pos, quat, margin, ws, rows, row_
     return k
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def kept_count(rows, k, margin):
     """How many of the first k rows have depth > -margin."""
     kept = 0
@@ -160,7 +160,7 @@ def manifold_arrays(rows, row_pair, k, pairs, margin, n):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def fill_manifold(rows, row_pair, k, pairs, margin, n, out):
     """manifold_arrays into out = (a, b, point, normal, depth, key), sized to the kept rows."""
     a, b, point, normal, depth, key = out

@@ -95,7 +95,7 @@ def overlaps(cols, p, q):
 
 # ---- the pair list: (a, b) rows in Manifold order, grown by doubling -------------------
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def reserve(pairs, need):
     """`pairs` with room for `need` rows: the same array, or a copy at least twice as long."""
     out = pairs
@@ -121,7 +121,7 @@ def sort_pairs(pairs, k, n):
     return sort_into(pairs, k, np.zeros(n + 2, np.int64), np.empty((k, 2), np.int64))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def sort_into(pairs, k, start, out):
     """sort_pairs into `out` (k, 2): a counting sort on the lower index
     (`start`: n + 2 zeros), then insertion sort within each (short) run."""
@@ -523,7 +523,7 @@ def box_support(w, x, y, z, h0, h1, h2, n0, n1, n2):
     return dot_lanes(p0, p1, p2, h0, h1, h2)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _plane_gaps(kind, dims, pos, quat, p, bodies, mode, gaps):
     """gaps[r]: height of body r's lowest point above plane p (n·x = offset)."""
     n0, n1, n2 = dims[p, NORMAL], dims[p, NORMAL + 1], dims[p, NORMAL + 2]
@@ -537,7 +537,7 @@ def _plane_gaps(kind, dims, pos, quat, p, bodies, mode, gaps):
         gaps[r] = height - low
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _plane_pairs(kind, dims, pos, quat, margin, planes, bodies, gaps, pairs, k):
     """(plane, body) for each dynamic body (`bodies`) whose lowest point lies
     less than `margin` above a plane n·x = offset (solid below); gaps:
@@ -555,7 +555,7 @@ def _plane_pairs(kind, dims, pos, quat, margin, planes, bodies, gaps, pairs, k):
     return pairs, k
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def finite_poses(kind, pos, quat):
     """Are the poses detection reads finite: every solid body's position and
     every box's orientation? (The numpy broad phase raises on others; the

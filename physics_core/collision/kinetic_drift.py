@@ -67,7 +67,7 @@ def _anchor(R, I, M, MI, k, out):
          l0 * M[k, L + 2] + l1 * M[k, L + STRIDE + 2])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def kinetic_velocity_change(R, I, M, MI, n, store):
     """(n, 3) each body's velocity change from friction at its kinetic bound
     (the solve's final impulses, before the collision pass's are added);

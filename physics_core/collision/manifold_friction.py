@@ -193,7 +193,7 @@ def _take_row_friction(R, M, k, first, count):
         R[c, LAM + 2] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def anchor_warm_start(M, MI, I, vel, omega):
     """The anchors' warm-started tangential impulses applied (the table has
     the rows' column layout: pair_velocity.py, as for the rows)."""
@@ -255,7 +255,7 @@ def anchor_cap(M, k, n0, n1, n2, ln, sliding):
     return n0, n1, min(max(n2, -twist), twist)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def anchor_friction_out(R, M, MI, friction):
     """The anchors' tangential impulses shared equally by their rows, as world
     vectors (the warm cache and the events read the rows)."""

@@ -46,7 +46,7 @@ def apply_impulse(R, c, r, lam, a, b, vel, omega):
         omega[b, i] += lam * R[c, TURN_B + STRIDE * r + i]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def warm_start(R, I, vel, omega):
     """Apply the impulses λ the rows start with (loaded from last substep)."""
     for c in range(len(R)):
@@ -268,7 +268,7 @@ def _friction_and_slip_row(R, I, c, vel, omega, friction, slip):
     slip[c] = math.sqrt(u1 * u1 + u2 * u2)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def friction_and_slip(R, I, vel, omega, friction, slip):
     """Per contact: the tangential impulse as a world vector λ_t1 t1 + λ_t2 t2
     (it survives a change of tangent basis) and the slip speed |u_t| now."""
@@ -287,7 +287,7 @@ def friction_of(R, I, friction, moved):
             _friction_row(R, c, friction)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def least_mass(R):
     m = math.inf
     for c in range(len(R)):

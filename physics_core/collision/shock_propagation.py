@@ -132,7 +132,7 @@ def support_layers(R, I, MI, n, store):
     return layer, (start, other)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def holds_something(R):
     """Whether some contact has an immovable side (zero inverse mass): without
     one the sweep has no layer to start from and visits nothing."""

@@ -70,13 +70,13 @@ def cached(cache_keys, cache_values):
     return keys[1:keys[0] + 1], values[:keys[0]]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def warm_load(R, I, key, cache_keys, cache_values, fraction, static_speed, vel0, omega0):
     old_key, old = cached(cache_keys, cache_values)
     load_warm(R, I, key, old_key, old, fraction, static_speed, vel0, omega0)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def warm_store(cache_keys, cache_values, key, R, friction, slip):
     """Keep this substep's impulses, friction vectors and slip speeds by key in
     the cache's arrays (grown by doubling; the old entries were read by
