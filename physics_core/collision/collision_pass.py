@@ -262,7 +262,7 @@ def _pass_sweep(R, I, vel, omega, terms, target, tau, J, table, since, retest, a
     return bounced
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def collision_pass(R, I, vel, omega, vel_start, omega_start, threshold, ramp, h, w, sweeps,
                    target, tau, J, table, since, anchors, retest_all=False):
     """Sweeps of bounces, pair by pair, until none bounces (at most `sweeps`).

@@ -238,7 +238,7 @@ def contact_arms(R, c, i, j, point, depth, pos, vel, omega, iw, h, rewound):
     return s0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def build_rows(R, I, a, b, point, normal, depth, pos, iw, vel, omega, inv_mass, material,
                mu_static, mu_kinetic, restitution, rule, h, toi):
     """Fill R, I for the k contacts (a, b, point, normal, depth); iw: the

@@ -143,7 +143,7 @@ def _invert(M, k, w):
             M[k, W_INV + 3 * r + s] = (w[r1, s1] * w[r2, s2] - w[r1, s2] * w[r2, s1]) * inv
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def anchor_rows(R, I, point, pos, iw, toi, h, store):
     """(M, MI) of the contact rows: every manifold's range, and the anchor
     rows of those with two or more points (the rows' own friction zeroed);

@@ -200,7 +200,7 @@ def sweep_manifolds(R, I, M, MI, vel, omega, changes, shares):
     return change
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def solve_velocities(R, I, M, MI, vel, omega, iterations, stops, changes, shares=None):
     """At most `iterations` sweeps over every manifold; stops after a sweep
     that changed no impulse by more than `limit` (N·s; < 0: never), stops =
@@ -276,7 +276,7 @@ def friction_and_slip(R, I, vel, omega, friction, slip):
         _friction_and_slip_row(R, I, c, vel, omega, friction, slip)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def friction_of(R, I, friction, moved):
     """The tangential impulses (world vectors) of the contacts with a body
     marked `moved` (n,), read again after the shock sweep: the others'

@@ -159,7 +159,7 @@ def _in_sweep(body_layer):
     return 0 < body_layer < UNREACHED
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def swept_bodies(layer, store):
     """(n,) the bodies whose velocities the sweep may have changed (shock_sweep's
     layers, _in_sweep), in scratch."""
@@ -566,7 +566,7 @@ def _settle_layer(tables, ms, uppers, vel, omega, passes, tolerance, layer, mass
         _lambdas(R, M, MI, ms, lam, True)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def shock_sweep(R, I, M, MI, vel, omega, n, passes, tolerance, masses, block, unsettled, store):
     """The ordered one-sided sweep (module docstring), layer after layer from
     the ground up, each settled in turn (`_settle_layer`; with `block`, a

@@ -105,7 +105,7 @@ def _buffers(cache_keys, cache_values, k):
     return keys, values
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def warm_clear(cache_keys, cache_values):
     keys = cache_keys[0]
     keys[0] = 0
