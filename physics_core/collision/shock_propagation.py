@@ -210,31 +210,11 @@ def leave_out_settled(I, MI, layer, graph, unsettled, store):
 
 
 @njit(cache=True, inline="always")
-def _plus_zero(x):
-    return x == 0.0 and math.copysign(1.0, x) > 0.0
-
-
-@njit(cache=True, inline="always")
-def _held(T, k, inv_mass, turn):
-    """Whether entry k of a row table has that side immovable already: its
-    inverse mass and the nine I_w⁻¹ (r × d_r) all exactly +0.0, as freezing
-    writes them (a static or sleeping body, the ground under a pile), so that
-    freezing it again would change no number of the entry."""
-    if not _plus_zero(T[k, inv_mass]):
-        return False
-    for r in range(3):
-        for i in range(3):
-            if not _plus_zero(T[k, turn + STRIDE * r + i]):
-                return False
-    return True
-
-
-@njit(cache=True, inline="always")
 def _make_immovable(T, k, inv_mass, turn):
     """Entry k's side (its inverse-mass column, its nine turn columns) set to
-    +0.0; nothing written when it was so already (_held)."""
-    if _held(T, k, inv_mass, turn):
-        return
+    +0.0. A side immovable already (a static or sleeping body, the ground
+    under a pile) holds +0.0 there as the row was built, so freezing it
+    again changes no number of the entry."""
     T[k, inv_mass] = 0.0
     for r in range(3):
         for i in range(3):
@@ -399,8 +379,8 @@ def _point_change(p0, p, o, lever):
 @njit(cache=True, inline="always")
 def _update(R1, I1, M1, MI1, m, vel, omega, lever, shares):
     """One update of manifold m (a face's points first moved together,
-    sequential_impulses.update_points, with their shares); returns the largest change of a contact-point velocity of its
-    bodies it made (m/s)."""
+    sequential_impulses.update_points, with their shares); returns the
+    largest change of a contact-point velocity of its bodies it made (m/s)."""
     first, count = MI1[m, FIRST], MI1[m, COUNT]
     a, b = I1[first, BODY_A], I1[first, BODY_B]
     p0 = load_pair(vel, omega, a, b)
