@@ -36,14 +36,14 @@ def _any_outside(a):
     return bad
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def all_finite(pos, quat, vel, omega):
     """Whether every body's pose and velocity is finite (allocates nothing: it
     runs after every stage)."""
     return not (_any_outside(pos) | _any_outside(vel) | _any_outside(omega) | _any_outside(quat))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def velocities_finite(vel, omega):
     """all_finite for a stage that changes velocities only (the poses were
     checked after the stage that last moved them)."""

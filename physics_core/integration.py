@@ -245,7 +245,7 @@ def _rk4(h, data, state, body, loads, rotating, work, prof):
                        pos, quat, vel, omega)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def spins(omega):
     """Whether some body has ω ≠ 0 (NaN counts, as in numpy's any)."""
     for i in range(len(omega)):

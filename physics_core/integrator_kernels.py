@@ -68,7 +68,7 @@ def explicit_euler_update(pos, quat, vel, omega, F, T, inv_mass, inertia, inv_in
             _set3(omega, i, diagonal_one(q, row3(inv_inertia, i), L, iso[i]))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def semi_implicit_update(pos, quat, vel, omega, F, T, inv_mass, inertia, inv_inertia, iso, h, rotating):
     """v ← v + a h, x ← x + v h (symplectic Euler); L ← I_w ω + τ h, then the
     torque-free rotation."""

@@ -514,13 +514,13 @@ def _remembered_rows(ints, flts, counts):
 
 # ---- entry points for compiled callers (state as one tuple) ------------------
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def events_reset(state):
     """Start a step: what events_add gathered before is dropped."""
     state[2][M] = 0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def events_add(state, key, a, b, point, normal, depth, impulse_n, friction, speed):
     """Record one substep's contact rows, after its solve: key (k,) int64
     ascending and unique (else ValueError); a, b (k,) bodies; point, normal
@@ -533,7 +533,7 @@ def events_add(state, key, a, b, point, normal, depth, impulse_n, friction, spee
     _log_add(ints, flts, counts, key, a, b, point, normal, depth, impulse_n, friction, speed)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def events_finish(state, moving):
     """End the step: its events (then the pending ends of removed bodies'
     contacts) into the state's output buffers, the count in counts[K]; the

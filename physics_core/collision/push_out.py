@@ -23,7 +23,7 @@ from .contact_layout import (ARM_A, ARM_B, BODY_A, BODY_B, DEPTH, DIR, INV_MASS_
 from .scratch import take, take_bools, take_rows
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def bounce_remainders(I, target, tau, after):
     """after (n,): per body the largest 1 − τ of its bouncing contacts (-1: none)."""
     after[:] = -1.0
@@ -34,7 +34,7 @@ def bounce_remainders(I, target, tau, after):
     return after
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def velocity_changes(vel, omega, vel0, omega0, I, target, tau, toi, slide, store):
     """(n, 6) the rate each body still moves at over h beyond the integrator's
     motion: what the solve changed, over the part of the substep it acts on;
@@ -60,7 +60,7 @@ def velocity_changes(vel, omega, vel0, omega0, I, target, tau, toi, slide, store
     return dV
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def separations(R, I, dV, h, out):
     """Separation of each contact after moving by dV h: n·Δ(x_b − x_a) − depth."""
     for c in range(len(R)):
@@ -72,7 +72,7 @@ def separations(R, I, dV, h, out):
         out[c] = s * h - R[c, DEPTH]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def push_targets(sep, slop, rate, max_speed, h, target):
     """Pseudo-velocity each contact asks for; returns how many ask."""
     count = 0
@@ -85,7 +85,7 @@ def push_targets(sep, slop, rate, max_speed, h, target):
     return count
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def solve_pseudo(R, I, target, iterations, n, store):
     """(n, 3) pseudo-velocities of the centres: normal rows pushed apart to
     `target`, from zero. Only rows of bodies that some row must push take
@@ -120,7 +120,7 @@ def solve_pseudo(R, I, target, iterations, n, store):
     return X
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def move_bodies(pos, quat, dV, X, h):
     """x += (Δv + pseudo-velocity) h; q turned by Δω h where Δω ≠ 0."""
     for i in range(len(pos)):
@@ -131,7 +131,7 @@ def move_bodies(pos, quat, dV, X, h):
             quat[i, 0], quat[i, 1], quat[i, 2], quat[i, 3] = q
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def correct(R, I, pos, quat, vel, omega, vel0, omega0, target, tau, toi, slide, h, slop, rate,
             max_speed, iterations, store):
     """The whole correct stage (see the module docstring); store: the

@@ -74,7 +74,7 @@ def empty_store():
     return np.empty(0), counts, np.empty(0)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def open_arena(scratch, counts):
     """The store of a new substep: the buffers grown to the last demands."""
     if counts[CURSOR] > len(scratch[0]):

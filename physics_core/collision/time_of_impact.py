@@ -303,7 +303,7 @@ def rewind(i, t, p0, q0, pos, quat, omega):
         omega[i, k] = Rt[k][0] * wb[0] + Rt[k][1] * wb[1] + Rt[k][2] * wb[2]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def rewind_fast_bodies(kind, dims, reach, is_static, moving, p0, q0, pos, quat, omega, threshold,
                        margin, iterations, tolerance, toi, fast):
     """The ccd stage: toi[i] = time of impact (fraction of the substep) of each
